@@ -1,0 +1,581 @@
+//! The body: subjects' proportions, tapered elliptic capsules along the bones, and the suit pattern on them.
+//!
+//! A [`Subject`] scales the mocap skeleton (height, limb ratios) and the flesh around it (girth).
+//! [`Body::new`] builds one [`BodyPart`] per bone segment, a capsule whose cross-section is an ellipse
+//! that tapers linearly from one end to the other and is closed by half-ellipsoid caps. Each part
+//! moves rigidly with its joint. Suit parts carry the marker grid in physical units: rows every
+//! `pitch` centimetres along the bone, columns every ≥ `pitch` centimetres of arc around it, so a
+//! marker is a `marker_size_cm` square on any subject. The generator rasterizes [`PartMesh`]es and
+//! paints them with [`BodyPart::marker_at`]; the cloth stage will use the same capsules as collision
+//! proxies.
+
+use std::f32::consts::TAU;
+
+use glam::{Affine3A, Vec2, Vec3};
+
+use crate::skeleton::Skeleton;
+use crate::suit::SuitDefinition;
+
+/// Height of the unscaled mocap figure (the Daz "Aiko3" of the shipped CMU conversion), top of head.
+pub const BASE_HEIGHT_CM: f32 = 166.0;
+
+/// What a part is made of, which decides its colour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Material {
+    /// Suit cloth with the marker pattern.
+    Suit,
+    Skin,
+    Shoe,
+}
+
+/// Proportions and colours of one person.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Subject {
+    pub name: &'static str,
+    pub height_cm: f32,
+    /// Multiplies every radius (1 = the base figure's build).
+    pub girth: f32,
+    /// Multiplies arm bone lengths on top of the height scale.
+    pub arm_ratio: f32,
+    /// Multiplies leg bone lengths on top of the height scale.
+    pub leg_ratio: f32,
+    /// Skin albedo, linear RGB in [0, 1].
+    pub skin: [f32; 3],
+    /// Shoe albedo.
+    pub shoe: [f32; 3],
+}
+
+/// The built-in subjects the generator renders, selectable by name or index.
+pub const SUBJECTS: [Subject; 6] = [
+    Subject { name: "ana", height_cm: 158.0, girth: 0.92, arm_ratio: 1.00, leg_ratio: 0.97, skin: [0.87, 0.68, 0.58], shoe: [0.06, 0.06, 0.07] },
+    Subject { name: "ben", height_cm: 186.0, girth: 1.12, arm_ratio: 1.03, leg_ratio: 1.02, skin: [0.62, 0.44, 0.32], shoe: [0.10, 0.08, 0.07] },
+    Subject { name: "chidi", height_cm: 176.0, girth: 1.00, arm_ratio: 1.05, leg_ratio: 1.05, skin: [0.36, 0.24, 0.18], shoe: [0.05, 0.05, 0.05] },
+    Subject { name: "dana", height_cm: 165.0, girth: 1.22, arm_ratio: 0.97, leg_ratio: 0.95, skin: [0.78, 0.58, 0.44], shoe: [0.12, 0.10, 0.10] },
+    Subject { name: "emil", height_cm: 193.0, girth: 0.95, arm_ratio: 1.04, leg_ratio: 1.08, skin: [0.93, 0.76, 0.68], shoe: [0.08, 0.08, 0.10] },
+    Subject { name: "fumiko", height_cm: 152.0, girth: 0.90, arm_ratio: 0.98, leg_ratio: 0.96, skin: [0.90, 0.74, 0.60], shoe: [0.15, 0.12, 0.12] },
+];
+
+impl Subject {
+    /// A built-in subject by name (case-insensitive) or index.
+    pub fn find(name_or_index: &str) -> Option<&'static Subject> {
+        if let Ok(index) = name_or_index.parse::<usize>() {
+            return SUBJECTS.get(index);
+        }
+        SUBJECTS.iter().find(|s| s.name.eq_ignore_ascii_case(name_or_index))
+    }
+
+    fn height_scale(&self) -> f32 {
+        self.height_cm / BASE_HEIGHT_CM
+    }
+
+    /// Bone-length factor of joint `index`: arms and legs get their ratios on top of the height scale.
+    fn bone_scale(&self, skeleton: &Skeleton, index: usize) -> f32 {
+        let h = self.height_scale();
+        let in_subtree = |names: &[&str]| {
+            names.iter().filter_map(|n| skeleton.find(n)).any(|root| skeleton.is_ancestor(root, index))
+        };
+        if in_subtree(&["rShldr", "lShldr"]) {
+            h * self.arm_ratio
+        } else if in_subtree(&["rThigh", "lThigh"]) {
+            h * self.leg_ratio
+        } else {
+            h
+        }
+    }
+
+    /// The mocap skeleton with this subject's bone lengths.
+    pub fn scale_skeleton(&self, skeleton: &Skeleton) -> Skeleton {
+        let scales: Vec<f32> = (0..skeleton.len()).map(|i| self.bone_scale(skeleton, i)).collect();
+        skeleton.map_offsets(|i, offset| offset * scales[i])
+    }
+
+    /// Scales a frame's root translation so that the feet of the scaled figure stay on the floor:
+    /// height by the leg scale, ground-plane motion by the height scale.
+    pub fn scale_root_translation(&self, skeleton: &Skeleton, frame: &mut [f32]) {
+        let h = self.height_scale();
+        let root = skeleton.joint(0);
+        for (k, channel) in root.channels.iter().enumerate() {
+            let scale = match channel {
+                crate::skeleton::Channel::Yposition => h * self.leg_ratio,
+                crate::skeleton::Channel::Xposition | crate::skeleton::Channel::Zposition => h,
+                _ => 1.0,
+            };
+            if let Some(v) = frame.get_mut(root.first_channel + k) {
+                *v *= scale;
+            }
+        }
+    }
+}
+
+/// A capsule with elliptic, linearly tapering cross-section, in its joint's local frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyPart {
+    pub name: &'static str,
+    /// Joint whose world transform moves the part.
+    pub joint: usize,
+    pub start: Vec3,
+    pub end: Vec3,
+    /// Semi-axes (along `width_axis`, across it) at `start`.
+    pub radii_start: Vec2,
+    pub radii_end: Vec2,
+    /// Unit vector ⟂ to the bone along which the first semi-axis lies.
+    pub width_axis: Vec3,
+    /// Length of each end cap along the bone, as a fraction of the smaller semi-axis.
+    pub cap: f32,
+    pub material: Material,
+    /// Pattern surface id (the part's index), part of every marker id on it.
+    pub surface: u32,
+}
+
+/// A vertex of a part's mesh, in the part's joint frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceVertex {
+    pub position: Vec3,
+    pub normal: Vec3,
+    /// Centimetres along the bone from `start` (negative or beyond the length on the caps).
+    pub u: f32,
+    /// Fraction of the way around the cross-section by arc length, in [0, 1].
+    pub s: f32,
+}
+
+/// Triangles wound so that `(b − a) × (c − a)` points out of the surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PartMesh {
+    pub vertices: Vec<SurfaceVertex>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// One marker of the suit pattern on one body part.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MarkerCell {
+    /// `surface · 10000 + row · 100 + column`.
+    pub id: u32,
+    /// Index into the suit's marker colours.
+    pub colour: usize,
+    pub row: u32,
+    pub column: u32,
+    /// Centre in (u cm, s fraction) surface coordinates.
+    pub centre_u: f32,
+    pub centre_s: f32,
+}
+
+/// Samples per quarter ellipse for the arc-length tables.
+const ARC_STEPS: usize = 64;
+
+impl BodyPart {
+    pub fn length(&self) -> f32 {
+        (self.end - self.start).length()
+    }
+
+    fn axis(&self) -> Vec3 {
+        (self.end - self.start).normalize_or(Vec3::Y)
+    }
+
+    /// The two unit directions of the cross-section: along the width axis and across it.
+    fn section_axes(&self) -> (Vec3, Vec3) {
+        let d = self.axis();
+        let mut e1 = self.width_axis - d * self.width_axis.dot(d);
+        if e1.length_squared() < 1e-6 {
+            e1 = d.any_orthonormal_vector();
+        }
+        let e1 = e1.normalize();
+        (e1, d.cross(e1))
+    }
+
+    /// Semi-axes at `u` cm along the bone (clamped to the straight section).
+    pub fn radii_at(&self, u: f32) -> Vec2 {
+        let t = (u / self.length().max(1e-6)).clamp(0.0, 1.0);
+        self.radii_start.lerp(self.radii_end, t)
+    }
+
+    /// Perimeter of the cross-section at `u`.
+    pub fn circumference_at(&self, u: f32) -> f32 {
+        let r = self.radii_at(u);
+        ellipse_arc_table(r.x, r.y)[4 * ARC_STEPS]
+    }
+
+    /// Point and outward normal at `u` cm along the straight section and angle `theta` around it.
+    pub fn surface_point(&self, u: f32, theta: f32) -> (Vec3, Vec3) {
+        let (e1, e2) = self.section_axes();
+        let d = self.axis();
+        let r = self.radii_at(u);
+        let length = self.length().max(1e-6);
+        let slope = (self.radii_end - self.radii_start) / length;
+        let (sin, cos) = theta.sin_cos();
+        let position = self.start + d * u + e1 * (r.x * cos) + e2 * (r.y * sin);
+        // Gradient of the implicit surface (x/a)² + (y/b)² = 1 with a, b tapering along d.
+        let normal = (e1 * (cos / r.x) + e2 * (sin / r.y)
+            - d * (slope.x * cos * cos / r.x + slope.y * sin * sin / r.y))
+            .normalize_or(e1);
+        (position, normal)
+    }
+
+    /// Angle at which the arc length from θ = 0 is the fraction `s` of the perimeter at `u`.
+    pub fn theta_for(&self, u: f32, s: f32) -> f32 {
+        let r = self.radii_at(u);
+        let table = ellipse_arc_table(r.x, r.y);
+        let target = s.rem_euclid(1.0) * table[4 * ARC_STEPS];
+        let i = table.partition_point(|&a| a < target).clamp(1, 4 * ARC_STEPS);
+        let (a0, a1) = (table[i - 1], table[i]);
+        let frac = if a1 > a0 { (target - a0) / (a1 - a0) } else { 0.0 };
+        (i as f32 - 1.0 + frac) * TAU / (4 * ARC_STEPS) as f32
+    }
+
+    /// Triangle mesh: `around` segments around, rings about every `ring_spacing` cm, five rings per cap.
+    pub fn mesh(&self, around: usize, ring_spacing: f32) -> PartMesh {
+        let length = self.length();
+        let (e1, e2) = self.section_axes();
+        let d = self.axis();
+        // Rings: (u along the bone, scale of the cross-section, axial offset beyond the section).
+        let mut rings: Vec<(f32, f32)> = Vec::new(); // (u, section scale)
+        const CAP_RINGS: usize = 5;
+        let cap_start = self.cap * self.radii_start.x.min(self.radii_start.y);
+        let cap_end = self.cap * self.radii_end.x.min(self.radii_end.y);
+        for k in 0..CAP_RINGS {
+            let phi = (CAP_RINGS - k) as f32 / CAP_RINGS as f32 * std::f32::consts::FRAC_PI_2;
+            rings.push((-cap_start * phi.sin(), phi.cos()));
+        }
+        let sections = ((length / ring_spacing).ceil() as usize).max(1);
+        for k in 0..=sections {
+            rings.push((length * k as f32 / sections as f32, 1.0));
+        }
+        for k in 1..=CAP_RINGS {
+            let phi = k as f32 / CAP_RINGS as f32 * std::f32::consts::FRAC_PI_2;
+            rings.push((length + cap_end * phi.sin(), phi.cos()));
+        }
+
+        let mut vertices = Vec::with_capacity(rings.len() * (around + 1) + 2);
+        for &(u, scale) in &rings {
+            let clamped = u.clamp(0.0, length);
+            let r = self.radii_at(clamped);
+            let table = ellipse_arc_table(r.x, r.y);
+            let on_cap = u < 0.0 || u > length;
+            for k in 0..=around {
+                let theta = TAU * k as f32 / around as f32;
+                let (section_point, section_normal) = self.surface_point(clamped, theta);
+                let (position, normal) = if on_cap {
+                    // Half-ellipsoid cap: shrink the section toward the axis and bend the normal.
+                    let centre = self.start + d * clamped;
+                    let radial = section_point - centre;
+                    let axial = u - clamped;
+                    let cap_len = if u < 0.0 { cap_start } else { cap_end }.max(1e-3);
+                    let position = centre + radial * scale + d * axial;
+                    let normal = (section_normal * scale + d * (axial / cap_len)).normalize_or(d);
+                    (position, normal)
+                } else {
+                    (section_point, section_normal)
+                };
+                let step = k * ARC_STEPS * 4 / around;
+                let s = table[step.min(4 * ARC_STEPS)] / table[4 * ARC_STEPS];
+                vertices.push(SurfaceVertex { position, normal, u, s });
+            }
+        }
+        // Poles closing both caps.
+        let first_pole = vertices.len() as u32;
+        vertices.push(SurfaceVertex { position: self.start - d * cap_start, normal: -d, u: -cap_start, s: 0.0 });
+        vertices.push(SurfaceVertex { position: self.end + d * cap_end, normal: d, u: length + cap_end, s: 0.0 });
+
+        let stride = (around + 1) as u32;
+        let mut triangles = Vec::with_capacity(2 * rings.len() * around + 2 * around);
+        let mut push = |t: [u32; 3]| {
+            // Wind outward: compare the face normal with the vertices' normals.
+            let [a, b, c] = t.map(|i| vertices[i as usize]);
+            let face = (b.position - a.position).cross(c.position - a.position);
+            if face.dot(a.normal + b.normal + c.normal) >= 0.0 {
+                triangles.push(t);
+            } else {
+                triangles.push([t[0], t[2], t[1]]);
+            }
+        };
+        for ring in 0..rings.len() as u32 - 1 {
+            for k in 0..around as u32 {
+                let a = ring * stride + k;
+                let b = a + 1;
+                let c = a + stride + 1;
+                let dd = a + stride;
+                push([a, b, c]);
+                push([a, c, dd]);
+            }
+        }
+        let last_ring = (rings.len() as u32 - 1) * stride;
+        for k in 0..around as u32 {
+            push([first_pole, k, k + 1]);
+            push([first_pole + 1, last_ring + k, last_ring + k + 1]);
+        }
+        let _ = (e1, e2);
+        PartMesh { vertices, triangles }
+    }
+
+    /// Rows of the marker grid along the straight section and the offset of the first row.
+    fn rows(&self, pitch: f32) -> (u32, f32) {
+        let length = self.length();
+        let rows = (length / pitch).floor() as u32;
+        (rows, (length - rows as f32 * pitch) * 0.5)
+    }
+
+    /// Columns of row `row` (arc-length pitch ≥ `pitch`) and the perimeter they share.
+    fn columns(&self, row: u32, pitch: f32, first_row_u: f32) -> (u32, f32) {
+        let circumference = self.circumference_at(first_row_u + (row as f32 + 0.5) * pitch);
+        (((circumference / pitch).floor() as u32).max(1), circumference)
+    }
+
+    /// The marker covering surface point (`u`, `s`), if any. Only suit parts carry markers.
+    pub fn marker_at(&self, suit: &SuitDefinition, u: f32, s: f32) -> Option<MarkerCell> {
+        if self.material != Material::Suit {
+            return None;
+        }
+        let pitch = suit.pitch_cm();
+        let half = suit.marker_size_cm * 0.5;
+        let (rows, first) = self.rows(pitch);
+        let along = u - first;
+        if along < 0.0 {
+            return None;
+        }
+        let row = (along / pitch) as u32;
+        if row >= rows || (along - (row as f32 + 0.5) * pitch).abs() > half {
+            return None;
+        }
+        let (columns, circumference) = self.columns(row, pitch, first);
+        let around = s.rem_euclid(1.0) * columns as f32;
+        let column = (around as u32).min(columns - 1);
+        let cell_width = circumference / columns as f32;
+        if ((around - column as f32 - 0.5) * cell_width).abs() > half {
+            return None;
+        }
+        Some(self.cell(suit, row, column, first, pitch, columns))
+    }
+
+    fn cell(&self, suit: &SuitDefinition, row: u32, column: u32, first: f32, pitch: f32, columns: u32) -> MarkerCell {
+        MarkerCell {
+            id: self.surface * 10_000 + row * 100 + column,
+            colour: suit.marker_colour(self.surface, row as i32, column),
+            row,
+            column,
+            centre_u: first + (row as f32 + 0.5) * pitch,
+            centre_s: (column as f32 + 0.5) / columns as f32,
+        }
+    }
+
+    /// Every marker of the pattern on this part.
+    pub fn markers(&self, suit: &SuitDefinition) -> Vec<MarkerCell> {
+        if self.material != Material::Suit {
+            return Vec::new();
+        }
+        let pitch = suit.pitch_cm();
+        let (rows, first) = self.rows(pitch);
+        let mut out = Vec::new();
+        for row in 0..rows {
+            let (columns, _) = self.columns(row, pitch, first);
+            for column in 0..columns {
+                out.push(self.cell(suit, row, column, first, pitch, columns));
+            }
+        }
+        out
+    }
+
+    /// The four corners of a marker square (local frame), ordered so that `(b − a) × (c − a)` points
+    /// outward, and its centre.
+    pub fn marker_corners(&self, suit: &SuitDefinition, cell: &MarkerCell) -> ([Vec3; 4], Vec3) {
+        let half = suit.marker_size_cm * 0.5;
+        let ds = half / self.circumference_at(cell.centre_u);
+        let point = |du: f32, dsf: f32| {
+            let u = cell.centre_u + du;
+            self.surface_point(u, self.theta_for(u, cell.centre_s + dsf)).0
+        };
+        let corners = [point(-half, -ds), point(-half, ds), point(half, ds), point(half, -ds)];
+        let corners = if (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .dot(self.surface_point(cell.centre_u, self.theta_for(cell.centre_u, cell.centre_s)).1)
+            >= 0.0
+        {
+            corners
+        } else {
+            [corners[0], corners[3], corners[2], corners[1]]
+        };
+        (corners, point(0.0, 0.0))
+    }
+}
+
+/// Cumulative arc length of the ellipse (a cos θ, b sin θ) at θ = k·2π/(4·ARC_STEPS), k = 0..=4·ARC_STEPS.
+fn ellipse_arc_table(a: f32, b: f32) -> [f32; 4 * ARC_STEPS + 1] {
+    let mut table = [0.0f32; 4 * ARC_STEPS + 1];
+    let step = TAU / (4 * ARC_STEPS) as f32;
+    for k in 1..=4 * ARC_STEPS {
+        let mid = (k as f32 - 0.5) * step;
+        let speed = ((a * mid.sin()).powi(2) + (b * mid.cos()).powi(2)).sqrt();
+        table[k] = table[k - 1] + speed * step;
+    }
+    table
+}
+
+/// A subject's body on a (scaled) skeleton.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Body {
+    pub parts: Vec<BodyPart>,
+}
+
+/// The skeleton lacks a joint the body model hangs a part on.
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[error("the body model needs BVH joint '{0}', which the motion's skeleton lacks (expected the CMU/Daz joint names of the shipped mocap)")]
+pub struct MissingJoint(pub String);
+
+impl Body {
+    /// Builds the subject's parts on `skeleton`, which must already be scaled by
+    /// [`Subject::scale_skeleton`].
+    pub fn new(subject: &Subject, skeleton: &Skeleton) -> Result<Body, MissingJoint> {
+        let find = |name: &str| skeleton.find(name).ok_or_else(|| MissingJoint(name.to_owned()));
+        let offset = |name: &str| -> Result<Vec3, MissingJoint> { Ok(skeleton.joint(find(name)?).offset) };
+        let h = subject.height_scale();
+        let g = subject.girth * h;
+        let r = |a: f32, b: f32| Vec2::new(a, b) * g;
+        let mut parts = Vec::new();
+        let mut add = |name, joint: &str, start: Vec3, end: Vec3, rs: Vec2, re: Vec2, width_axis: Vec3, cap: f32, material| {
+            let surface = parts.len() as u32;
+            parts.push(BodyPart {
+                name,
+                joint: find(joint)?,
+                start,
+                end,
+                radii_start: rs,
+                radii_end: re,
+                width_axis,
+                cap,
+                material,
+                surface,
+            });
+            Ok::<(), MissingJoint>(())
+        };
+        use Material::*;
+        let abdomen = offset("abdomen")?;
+        let chest = offset("chest")?;
+        let neck = offset("neck")?;
+        add("pelvis", "hip", Vec3::new(0.0, -7.0, 0.5) * h, abdomen, r(15.5, 10.5), r(13.8, 9.6), Vec3::X, 0.7, Suit)?;
+        add("abdomen", "abdomen", Vec3::ZERO, chest, r(13.8, 9.6), r(14.8, 10.0), Vec3::X, 0.5, Suit)?;
+        add("chest", "chest", Vec3::ZERO, neck * 0.86, r(15.2, 10.2), r(16.5, 9.5), Vec3::X, 0.55, Suit)?;
+        add("neck", "neck", Vec3::ZERO, offset("head")?, r(5.4, 5.4), r(5.0, 5.0), Vec3::X, 1.0, Skin)?;
+        add("head", "head", Vec3::new(0.0, 3.0, 1.5) * h, Vec3::new(0.0, 11.0, 1.5) * h, r(7.6, 9.0), r(7.6, 9.0), Vec3::X, 1.0, Skin)?;
+        for side in ["r", "l"] {
+            let j = |n: &str| format!("{side}{n}");
+            let hand = offset(&j("Hand"))?;
+            add(if side == "r" { "right_upper_arm" } else { "left_upper_arm" }, &j("Shldr"), Vec3::ZERO, offset(&j("ForeArm"))?, r(5.4, 5.4), r(4.3, 4.3), Vec3::Z, 1.0, Suit)?;
+            add(if side == "r" { "right_forearm" } else { "left_forearm" }, &j("ForeArm"), Vec3::ZERO, hand, r(4.2, 4.2), r(3.0, 3.0), Vec3::Z, 1.0, Suit)?;
+            let hand_dir = hand.normalize_or(Vec3::X);
+            add(if side == "r" { "right_hand" } else { "left_hand" }, &j("Hand"), hand_dir * 1.0, hand_dir * 14.0 * h * subject.arm_ratio, r(4.3, 1.8), r(3.8, 1.5), Vec3::Z, 1.0, Skin)?;
+            add(if side == "r" { "right_thigh" } else { "left_thigh" }, &j("Thigh"), Vec3::ZERO, offset(&j("Shin"))?, r(8.4, 8.0), r(5.6, 5.4), Vec3::X, 1.0, Suit)?;
+            add(if side == "r" { "right_shin" } else { "left_shin" }, &j("Shin"), Vec3::ZERO, offset(&j("Foot"))?, r(5.3, 5.3), r(3.9, 3.9), Vec3::X, 1.0, Suit)?;
+            let toe = skeleton.joint(find(&j("Foot"))?).end_site.unwrap_or(Vec3::new(0.0, -3.7, 12.1) * h);
+            add(if side == "r" { "right_foot" } else { "left_foot" }, &j("Foot"), Vec3::new(0.0, -3.6, -3.5) * h, toe + Vec3::new(0.0, 0.6, 0.0) * h, r(4.4, 3.4), r(4.0, 2.6), Vec3::X, 1.0, Shoe)?;
+        }
+        Ok(Body { parts })
+    }
+
+    /// World position of every marker centre and its outward normal for one frame's joint transforms.
+    pub fn part_transform<'a>(&self, part: &BodyPart, world: &'a [Affine3A]) -> &'a Affine3A {
+        &world[part.joint]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn suit() -> SuitDefinition {
+        SuitDefinition::load_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default")).expect("suit")
+    }
+
+    fn cylinder() -> BodyPart {
+        BodyPart {
+            name: "test",
+            joint: 0,
+            start: Vec3::ZERO,
+            end: Vec3::new(0.0, 30.0, 0.0),
+            radii_start: Vec2::splat(10.0),
+            radii_end: Vec2::splat(10.0),
+            width_axis: Vec3::X,
+            cap: 1.0,
+            material: Material::Suit,
+            surface: 2,
+        }
+    }
+
+    #[test]
+    fn a_circle_has_perimeter_two_pi_r() {
+        let c = cylinder().circumference_at(5.0);
+        assert!((c - TAU * 10.0).abs() < 0.01, "{c}");
+        // Ramanujan's approximation for an ellipse 15 × 10.
+        let table = ellipse_arc_table(15.0, 10.0);
+        let (a, b) = (15.0f32, 10.0f32);
+        let h = ((a - b) / (a + b)).powi(2);
+        let ramanujan = std::f32::consts::PI * (a + b) * (1.0 + 3.0 * h / (10.0 + (4.0 - 3.0 * h).sqrt()));
+        assert!((table[4 * ARC_STEPS] - ramanujan).abs() < 0.05);
+    }
+
+    #[test]
+    fn grid_of_a_30_cm_cylinder_has_four_rows_of_eight() {
+        // Pitch 7: 4 rows (28 cm) centred on 30 cm, first row centre at 1 + 3.5 = 4.5 cm.
+        // Perimeter 62.8 cm → 8 columns of 7.85 cm.
+        let part = cylinder();
+        let s = suit();
+        let markers = part.markers(&s);
+        assert_eq!(markers.len(), 32);
+        assert_eq!(markers[0].centre_u, 4.5);
+        assert_eq!(markers[9].id, 2 * 10_000 + 100 + 1);
+        // A point at a marker's centre is on that marker; 3 cm along the bone is in the gap.
+        let m = markers[9];
+        assert_eq!(part.marker_at(&s, m.centre_u, m.centre_s), Some(m));
+        assert_eq!(part.marker_at(&s, m.centre_u + 3.0, m.centre_s), None);
+        assert_eq!(part.marker_at(&s, m.centre_u + 1.9, m.centre_s), Some(m));
+    }
+
+    #[test]
+    fn markers_are_four_centimetre_squares() {
+        let part = cylinder();
+        let s = suit();
+        let m = part.markers(&s)[5];
+        let (corners, centre) = part.marker_corners(&s, &m);
+        let side_along = corners[0].distance(corners[3]);
+        let side_around = corners[0].distance(corners[1]);
+        assert!((side_along - 4.0).abs() < 0.01, "{side_along}");
+        // A 4 cm arc on a 10 cm radius has a 3.97 cm chord.
+        assert!((side_around - 3.973).abs() < 0.02, "{side_around}");
+        assert!((centre.x.powi(2) + centre.z.powi(2)).sqrt() - 10.0 < 1e-3);
+        // Outward winding.
+        let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+        assert!(n.dot(Vec3::new(centre.x, 0.0, centre.z)) > 0.0);
+    }
+
+    #[test]
+    fn mesh_is_closed_and_wound_outward() {
+        let part = cylinder();
+        let mesh = part.mesh(16, 5.0);
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|i| mesh.vertices[i as usize].position);
+            let centroid = (a + b + c) / 3.0;
+            let n = (b - a).cross(c - a);
+            let radial = centroid - Vec3::new(0.0, centroid.y.clamp(0.0, 30.0), 0.0);
+            assert!(n.dot(radial) >= -1e-3, "inward triangle {t:?}");
+        }
+        // Every vertex lies on the capsule: within r of the segment.
+        for v in &mesh.vertices {
+            let axis_point = Vec3::new(0.0, v.position.y.clamp(0.0, 30.0), 0.0);
+            assert!((v.position.distance(axis_point) - 10.0).abs() < 0.05, "{v:?}");
+        }
+    }
+
+    #[test]
+    fn subjects_scale_the_skeleton() {
+        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_09_01_run.bvh");
+        let motion = crate::bvh::Motion::load(&clip).expect("clip");
+        let tall = Subject::find("emil").expect("emil");
+        let scaled = tall.scale_skeleton(&motion.skeleton);
+        let shin = motion.skeleton.find("rShin").expect("rShin");
+        let ratio = scaled.joint(shin).offset.length() / motion.skeleton.joint(shin).offset.length();
+        assert!((ratio - 193.0 / BASE_HEIGHT_CM * 1.08).abs() < 1e-4);
+        let body = Body::new(tall, &scaled).expect("body");
+        assert_eq!(body.parts.len(), 17);
+        assert_eq!(Subject::find("2").map(|s| s.name), Some("chidi"));
+        assert_eq!(Subject::find("Ana").map(|s| s.name), Some("ana"));
+        assert!(Subject::find("zed").is_none());
+    }
+}

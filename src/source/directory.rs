@@ -1,0 +1,393 @@
+//! A directory of numbered PNG/JPEG frames as a frame source.
+//!
+//! Files are ordered by natural sort of their names (`frame_2.png` before
+//! `frame_10.png`, `000001.png` before `000002.png`); files that are not
+//! `.png`, `.jpg` or `.jpeg` are ignored. Frame `i` is the `i`-th file in that
+//! order, stamped `i / fps`.
+//!
+//! The segmenter receives RGB frames that all have the first frame's size. A
+//! frame that cannot be read, is corrupt, or has another size gives an error
+//! naming the file and index; the next call moves on to the following file,
+//! so the caller can skip bad frames and count them.
+
+use std::cmp::Ordering;
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+
+use super::{timestamp_at_fps, Frame, FrameSource, SourceError};
+
+/// Reads numbered image files from a directory, in natural order.
+#[derive(Debug)]
+pub struct DirectorySource {
+    dir: PathBuf,
+    files: Vec<PathBuf>,
+    next: usize,
+    size: (u32, u32),
+    fps: f64,
+}
+
+/// Whether the file name has a PNG or JPEG extension (case-insensitive).
+pub fn is_frame_file(path: &Path) -> bool {
+    path.extension().and_then(OsStr::to_str).is_some_and(|e| {
+        ["png", "jpg", "jpeg"]
+            .iter()
+            .any(|x| e.eq_ignore_ascii_case(x))
+    })
+}
+
+/// Splits a name into runs of digits and runs of non-digits.
+fn chunks(name: &str) -> impl Iterator<Item = &str> {
+    let mut rest = name;
+    std::iter::from_fn(move || {
+        let first = rest.chars().next()?;
+        let digit = first.is_ascii_digit();
+        let end = rest
+            .find(|c: char| c.is_ascii_digit() != digit)
+            .unwrap_or(rest.len());
+        let (chunk, tail) = rest.split_at(end);
+        rest = tail;
+        Some(chunk)
+    })
+}
+
+/// Compares two digit runs by numeric value, without overflow.
+fn cmp_digits(a: &str, b: &str) -> Ordering {
+    let a_trim = a.trim_start_matches('0');
+    let b_trim = b.trim_start_matches('0');
+    a_trim
+        .len()
+        .cmp(&b_trim.len())
+        .then_with(|| a_trim.cmp(b_trim))
+}
+
+/// Natural ("human") order: digit runs compare by value, other text by bytes;
+/// exact ties (e.g. `1.png` vs `01.png`) fall back to plain byte order.
+pub fn natural_cmp(a: &str, b: &str) -> Ordering {
+    let mut ca = chunks(a);
+    let mut cb = chunks(b);
+    loop {
+        match (ca.next(), cb.next()) {
+            (None, None) => return a.cmp(b),
+            (None, Some(_)) => return Ordering::Less,
+            (Some(_), None) => return Ordering::Greater,
+            (Some(x), Some(y)) => {
+                let both_digits = x.starts_with(|c: char| c.is_ascii_digit())
+                    && y.starts_with(|c: char| c.is_ascii_digit());
+                let ord = if both_digits {
+                    cmp_digits(x, y)
+                } else {
+                    x.cmp(y)
+                };
+                if ord != Ordering::Equal {
+                    return ord;
+                }
+            }
+        }
+    }
+}
+
+/// The frame files of `dir` (PNG/JPEG only), naturally sorted by file name.
+pub fn list_frame_files(dir: &Path) -> Result<Vec<PathBuf>, SourceError> {
+    let io_err = |source| SourceError::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(io_err)? {
+        let path = entry.map_err(io_err)?.path();
+        if is_frame_file(&path) && path.is_file() {
+            files.push(path);
+        }
+    }
+    files.sort_by(|a, b| natural_cmp(&file_name(a), &file_name(b)));
+    Ok(files)
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// Width and height from an image file's header, without decoding pixels.
+fn read_dimensions(path: &Path) -> Result<(u32, u32), String> {
+    image::ImageReader::open(path)
+        .map_err(|e| e.to_string())?
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?
+        .into_dimensions()
+        .map_err(|e| e.to_string())
+}
+
+impl DirectorySource {
+    /// Lists the frames of `dir`; the stream's size is that of the first frame
+    /// whose header can be read. `fps` sets the timestamps (index / fps).
+    pub fn open(dir: &Path, fps: f64) -> Result<Self, SourceError> {
+        let files = list_frame_files(dir)?;
+        if files.is_empty() {
+            return Err(SourceError::EmptyDirectory {
+                path: dir.to_path_buf(),
+            });
+        }
+        let mut first_error = None;
+        let mut size = None;
+        for (index, file) in files.iter().enumerate() {
+            match read_dimensions(file) {
+                Ok(dims) => {
+                    size = Some(dims);
+                    break;
+                }
+                Err(reason) => {
+                    first_error.get_or_insert(SourceError::CorruptFrame {
+                        source_name: file.display().to_string(),
+                        index: index as u64,
+                        reason,
+                    });
+                }
+            }
+        }
+        let size = match (size, first_error) {
+            (Some(size), _) => size,
+            (None, Some(err)) => return Err(err),
+            (None, None) => {
+                return Err(SourceError::EmptyDirectory {
+                    path: dir.to_path_buf(),
+                })
+            }
+        };
+        Ok(DirectorySource {
+            dir: dir.to_path_buf(),
+            files,
+            next: 0,
+            size,
+            fps,
+        })
+    }
+
+    /// Number of frame files found.
+    pub fn len(&self) -> usize {
+        self.files.len()
+    }
+
+    /// Whether there are no frame files (never true for an opened source).
+    pub fn is_empty(&self) -> bool {
+        self.files.is_empty()
+    }
+
+    /// The frame files, in stream order.
+    pub fn files(&self) -> &[PathBuf] {
+        &self.files
+    }
+
+    fn load(&self, index: usize) -> Result<image::RgbImage, SourceError> {
+        let path = &self.files[index];
+        let bytes = std::fs::read(path).map_err(|source| SourceError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        let image = image::load_from_memory(&bytes).map_err(|e| SourceError::CorruptFrame {
+            source_name: path.display().to_string(),
+            index: index as u64,
+            reason: e.to_string(),
+        })?;
+        let got = (image.width(), image.height());
+        if got != self.size {
+            return Err(SourceError::SizeMismatch {
+                path: path.clone(),
+                index: index as u64,
+                expected: self.size,
+                got,
+            });
+        }
+        Ok(image.into_rgb8())
+    }
+}
+
+impl FrameSource for DirectorySource {
+    fn next_frame(&mut self) -> Result<Option<Frame>, SourceError> {
+        let index = self.next;
+        if index >= self.files.len() {
+            return Ok(None);
+        }
+        self.next += 1; // move on even if this frame fails
+        let image = self.load(index)?;
+        Ok(Some(Frame {
+            index: index as u64,
+            timestamp: timestamp_at_fps(index as u64, self.fps),
+            image,
+        }))
+    }
+
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    fn frame_rate(&self) -> Option<f64> {
+        (self.fps.is_finite() && self.fps > 0.0).then_some(self.fps)
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "frames dir {} ({} frames, {}x{})",
+            self.dir.display(),
+            self.files.len(),
+            self.size.0,
+            self.size.1
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use image::{ImageFormat, Rgb, RgbImage};
+    use std::time::Duration;
+
+    fn write_png(dir: &Path, name: &str, w: u32, h: u32, colour: [u8; 3]) {
+        RgbImage::from_pixel(w, h, Rgb(colour))
+            .save_with_format(dir.join(name), ImageFormat::Png)
+            .unwrap();
+    }
+
+    #[test]
+    fn natural_order() {
+        let mut names = vec![
+            "frame_10.jpg",
+            "frame_2.jpg",
+            "frame_1.jpg",
+            "a.png",
+            "frame_02b.png",
+        ];
+        names.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(
+            names,
+            vec![
+                "a.png",
+                "frame_1.jpg",
+                "frame_2.jpg",
+                "frame_02b.png",
+                "frame_10.jpg"
+            ]
+        );
+        assert_eq!(natural_cmp("000009.png", "000010.png"), Ordering::Less);
+        assert_eq!(
+            natural_cmp(
+                "99999999999999999999999.png",
+                "100000000000000000000000.png"
+            ),
+            Ordering::Less
+        );
+        assert_ne!(natural_cmp("1.png", "01.png"), Ordering::Equal);
+    }
+
+    #[test]
+    fn reads_frames_in_order_and_ignores_other_files() {
+        let dir = tempfile::tempdir().unwrap();
+        write_png(dir.path(), "frame_10.png", 4, 3, [0, 0, 255]);
+        write_png(dir.path(), "frame_2.png", 4, 3, [0, 255, 0]);
+        write_png(dir.path(), "frame_1.png", 4, 3, [255, 0, 0]);
+        std::fs::write(dir.path().join("notes.txt"), "hello").unwrap();
+        let mut src = DirectorySource::open(dir.path(), 10.0).unwrap();
+        assert_eq!(src.size(), (4, 3));
+        assert_eq!(src.frame_rate(), Some(10.0));
+        assert!(src.describe().contains("(3 frames"));
+        let colours: Vec<_> = std::iter::from_fn(|| src.next_frame().unwrap())
+            .map(|f| (f.index, f.timestamp, f.image.get_pixel(0, 0).0))
+            .collect();
+        assert_eq!(
+            colours,
+            vec![
+                (0, Duration::ZERO, [255, 0, 0]),
+                (1, Duration::from_millis(100), [0, 255, 0]),
+                (2, Duration::from_millis(200), [0, 0, 255]),
+            ]
+        );
+        assert!(src.next_frame().unwrap().is_none());
+    }
+
+    #[test]
+    fn jpeg_frames_work() {
+        let dir = tempfile::tempdir().unwrap();
+        RgbImage::from_pixel(8, 8, Rgb([200, 100, 50]))
+            .save_with_format(dir.path().join("000000.jpg"), ImageFormat::Jpeg)
+            .unwrap();
+        let mut src = DirectorySource::open(dir.path(), 30.0).unwrap();
+        let frame = src.next_frame().unwrap().unwrap();
+        let [r, g, b] = frame.image.get_pixel(4, 4).0;
+        assert!(r.abs_diff(200) < 8 && g.abs_diff(100) < 8 && b.abs_diff(50) < 8);
+    }
+
+    #[test]
+    fn empty_directory_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("readme.md"), "x").unwrap();
+        assert!(matches!(
+            DirectorySource::open(dir.path(), 30.0),
+            Err(SourceError::EmptyDirectory { .. })
+        ));
+    }
+
+    #[test]
+    fn corrupt_and_mismatched_frames_are_reported_and_skipped() {
+        let dir = tempfile::tempdir().unwrap();
+        write_png(dir.path(), "000000.png", 4, 4, [1, 2, 3]);
+        // Truncated PNG: the first half of a valid file.
+        write_png(dir.path(), "000001.png", 4, 4, [1, 2, 3]);
+        let full = std::fs::read(dir.path().join("000001.png")).unwrap();
+        std::fs::write(dir.path().join("000001.png"), &full[..full.len() / 2]).unwrap();
+        // Not an image at all.
+        std::fs::write(dir.path().join("000002.jpg"), b"not a jpeg").unwrap();
+        write_png(dir.path(), "000003.png", 5, 4, [1, 2, 3]);
+        write_png(dir.path(), "000004.png", 4, 4, [9, 9, 9]);
+
+        let mut src = DirectorySource::open(dir.path(), 30.0).unwrap();
+        assert_eq!(src.next_frame().unwrap().unwrap().index, 0);
+        match src.next_frame() {
+            Err(SourceError::CorruptFrame {
+                source_name, index, ..
+            }) => {
+                assert_eq!(index, 1);
+                assert!(source_name.ends_with("000001.png"));
+            }
+            other => panic!("expected CorruptFrame, got {other:?}"),
+        }
+        match src.next_frame() {
+            Err(SourceError::CorruptFrame {
+                source_name, index, ..
+            }) => {
+                assert_eq!(index, 2);
+                assert!(source_name.ends_with("000002.jpg"));
+            }
+            other => panic!("expected CorruptFrame, got {other:?}"),
+        }
+        match src.next_frame() {
+            Err(SourceError::SizeMismatch {
+                path,
+                index,
+                expected,
+                got,
+            }) => {
+                assert_eq!((index, expected, got), (3, (4, 4), (5, 4)));
+                assert!(path.ends_with("000003.png"));
+            }
+            other => panic!("expected SizeMismatch, got {other:?}"),
+        }
+        let last = src.next_frame().unwrap().unwrap();
+        assert_eq!((last.index, last.image.get_pixel(0, 0).0), (4, [9, 9, 9]));
+        assert!(src.next_frame().unwrap().is_none());
+    }
+
+    #[test]
+    fn corrupt_first_frame_does_not_stop_opening() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("0.png"), b"garbage").unwrap();
+        write_png(dir.path(), "1.png", 2, 2, [0, 0, 0]);
+        let mut src = DirectorySource::open(dir.path(), 30.0).unwrap();
+        assert_eq!(src.size(), (2, 2));
+        assert!(matches!(
+            src.next_frame(),
+            Err(SourceError::CorruptFrame { index: 0, .. })
+        ));
+        assert_eq!(src.next_frame().unwrap().unwrap().index, 1);
+    }
+}
