@@ -159,6 +159,59 @@ pub struct MarkerCell {
     pub centre_s: f32,
 }
 
+/// The marker layout of one body part, precomputed for per-pixel lookups.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MarkerGrid {
+    surface: u32,
+    pitch: f32,
+    half_size: f32,
+    /// `u` of the start of the first row.
+    first_row_u: f32,
+    /// Per row: number of columns and the perimeter they share.
+    rows: Vec<(u32, f32)>,
+    layout_seed: u64,
+    colours: usize,
+}
+
+impl MarkerGrid {
+    fn cell(&self, row: u32, column: u32) -> MarkerCell {
+        let columns = self.rows[row as usize].0;
+        MarkerCell {
+            id: self.surface * 10_000 + row * 100 + column,
+            colour: crate::suit::layout_colour(self.layout_seed, self.colours, self.surface, row as i32, column),
+            row,
+            column,
+            centre_u: self.first_row_u + (row as f32 + 0.5) * self.pitch,
+            centre_s: (column as f32 + 0.5) / columns as f32,
+        }
+    }
+
+    /// The marker covering surface point (`u` cm along the bone, `s` fraction around), if any.
+    pub fn marker_at(&self, u: f32, s: f32) -> Option<MarkerCell> {
+        let along = u - self.first_row_u;
+        if along < 0.0 {
+            return None;
+        }
+        let row = (along / self.pitch) as u32;
+        let &(columns, circumference) = self.rows.get(row as usize)?;
+        if (along - (row as f32 + 0.5) * self.pitch).abs() > self.half_size {
+            return None;
+        }
+        let around = s.rem_euclid(1.0) * columns as f32;
+        let column = (around as u32).min(columns - 1);
+        let cell_width = circumference / columns as f32;
+        if ((around - column as f32 - 0.5) * cell_width).abs() > self.half_size {
+            return None;
+        }
+        Some(self.cell(row, column))
+    }
+
+    /// Every marker of the grid, row by row.
+    pub fn cells(&self) -> impl Iterator<Item = MarkerCell> + '_ {
+        (0..self.rows.len() as u32).flat_map(move |row| (0..self.rows[row as usize].0).map(move |column| self.cell(row, column)))
+    }
+}
+
 /// Samples per quarter ellipse for the arc-length tables.
 const ARC_STEPS: usize = 64;
 
@@ -224,10 +277,9 @@ impl BodyPart {
     /// Triangle mesh: `around` segments around, rings about every `ring_spacing` cm, five rings per cap.
     pub fn mesh(&self, around: usize, ring_spacing: f32) -> PartMesh {
         let length = self.length();
-        let (e1, e2) = self.section_axes();
         let d = self.axis();
-        // Rings: (u along the bone, scale of the cross-section, axial offset beyond the section).
-        let mut rings: Vec<(f32, f32)> = Vec::new(); // (u, section scale)
+        // Rings: (u along the bone, scale of the cross-section: 1 on the straight part, less on the caps).
+        let mut rings: Vec<(f32, f32)> = Vec::new();
         const CAP_RINGS: usize = 5;
         let cap_start = self.cap * self.radii_start.x.min(self.radii_start.y);
         let cap_end = self.cap * self.radii_end.x.min(self.radii_end.y);
@@ -302,75 +354,42 @@ impl BodyPart {
             push([first_pole, k, k + 1]);
             push([first_pole + 1, last_ring + k, last_ring + k + 1]);
         }
-        let _ = (e1, e2);
         PartMesh { vertices, triangles }
     }
 
-    /// Rows of the marker grid along the straight section and the offset of the first row.
-    fn rows(&self, pitch: f32) -> (u32, f32) {
+    /// The marker grid of this part for `suit`: rows along the straight section, each with its own
+    /// number of columns around. Empty for parts that are not suit cloth.
+    pub fn marker_grid(&self, suit: &SuitDefinition) -> MarkerGrid {
+        let pitch = suit.pitch_cm();
         let length = self.length();
-        let rows = (length / pitch).floor() as u32;
-        (rows, (length - rows as f32 * pitch) * 0.5)
-    }
-
-    /// Columns of row `row` (arc-length pitch ≥ `pitch`) and the perimeter they share.
-    fn columns(&self, row: u32, pitch: f32, first_row_u: f32) -> (u32, f32) {
-        let circumference = self.circumference_at(first_row_u + (row as f32 + 0.5) * pitch);
-        (((circumference / pitch).floor() as u32).max(1), circumference)
+        let rows = if self.material == Material::Suit { (length / pitch).floor() as u32 } else { 0 };
+        let first_row_u = (length - rows as f32 * pitch) * 0.5;
+        let rows = (0..rows)
+            .map(|row| {
+                let circumference = self.circumference_at(first_row_u + (row as f32 + 0.5) * pitch);
+                (((circumference / pitch).floor() as u32).max(1), circumference)
+            })
+            .collect();
+        MarkerGrid {
+            surface: self.surface,
+            pitch,
+            half_size: suit.marker_size_cm * 0.5,
+            first_row_u,
+            rows,
+            layout_seed: suit.layout_seed,
+            colours: suit.markers.len(),
+        }
     }
 
     /// The marker covering surface point (`u`, `s`), if any. Only suit parts carry markers.
+    /// (Per-pixel callers should build [`BodyPart::marker_grid`] once and ask it.)
     pub fn marker_at(&self, suit: &SuitDefinition, u: f32, s: f32) -> Option<MarkerCell> {
-        if self.material != Material::Suit {
-            return None;
-        }
-        let pitch = suit.pitch_cm();
-        let half = suit.marker_size_cm * 0.5;
-        let (rows, first) = self.rows(pitch);
-        let along = u - first;
-        if along < 0.0 {
-            return None;
-        }
-        let row = (along / pitch) as u32;
-        if row >= rows || (along - (row as f32 + 0.5) * pitch).abs() > half {
-            return None;
-        }
-        let (columns, circumference) = self.columns(row, pitch, first);
-        let around = s.rem_euclid(1.0) * columns as f32;
-        let column = (around as u32).min(columns - 1);
-        let cell_width = circumference / columns as f32;
-        if ((around - column as f32 - 0.5) * cell_width).abs() > half {
-            return None;
-        }
-        Some(self.cell(suit, row, column, first, pitch, columns))
-    }
-
-    fn cell(&self, suit: &SuitDefinition, row: u32, column: u32, first: f32, pitch: f32, columns: u32) -> MarkerCell {
-        MarkerCell {
-            id: self.surface * 10_000 + row * 100 + column,
-            colour: suit.marker_colour(self.surface, row as i32, column),
-            row,
-            column,
-            centre_u: first + (row as f32 + 0.5) * pitch,
-            centre_s: (column as f32 + 0.5) / columns as f32,
-        }
+        self.marker_grid(suit).marker_at(u, s)
     }
 
     /// Every marker of the pattern on this part.
     pub fn markers(&self, suit: &SuitDefinition) -> Vec<MarkerCell> {
-        if self.material != Material::Suit {
-            return Vec::new();
-        }
-        let pitch = suit.pitch_cm();
-        let (rows, first) = self.rows(pitch);
-        let mut out = Vec::new();
-        for row in 0..rows {
-            let (columns, _) = self.columns(row, pitch, first);
-            for column in 0..columns {
-                out.push(self.cell(suit, row, column, first, pitch, columns));
-            }
-        }
-        out
+        self.marker_grid(suit).cells().collect()
     }
 
     /// The four corners of a marker square (local frame), ordered so that `(b − a) × (c − a)` points
@@ -468,11 +487,7 @@ impl Body {
         }
         Ok(Body { parts })
     }
-
-    /// World position of every marker centre and its outward normal for one frame's joint transforms.
-    pub fn part_transform<'a>(&self, part: &BodyPart, world: &'a [Affine3A]) -> &'a Affine3A {
-        &world[part.joint]
-    }
+}
 }
 
 #[cfg(test)]

@@ -267,12 +267,15 @@ impl SuitDefinition {
     /// Colour index of the marker in grid cell (`row`, `column`) of body surface `surface`: a hash of
     /// the layout seed and the cell, so the pattern is fixed by the suit and independent of who wears it.
     pub fn marker_colour(&self, surface: u32, row: i32, column: u32) -> usize {
-        let key = self.layout_seed
-            ^ (u64::from(surface) << 48)
-            ^ ((row as u32 as u64) << 24)
-            ^ u64::from(column);
-        (splitmix64(key) % self.markers.len() as u64) as usize
+        layout_colour(self.layout_seed, self.markers.len(), surface, row, column)
     }
+}
+
+/// Colour index of grid cell (`row`, `column`) of `surface` in the layout drawn from `seed` over
+/// `colours` marker colours (see [`SuitDefinition::marker_colour`]).
+pub fn layout_colour(seed: u64, colours: usize, surface: u32, row: i32, column: u32) -> usize {
+    let key = seed ^ (u64::from(surface) << 48) ^ ((row as u32 as u64) << 24) ^ u64::from(column);
+    (splitmix64(key) % colours.max(1) as u64) as usize
 }
 
 impl SuitSkeleton {

@@ -16,7 +16,7 @@ use image::{GrayImage, RgbImage};
 use rand::Rng;
 use rand_distr::StandardNormal;
 
-use suitcap::body::{Body, MarkerCell, Material, PartMesh, Subject};
+use suitcap::body::{Body, MarkerCell, MarkerGrid, Material, PartMesh, Subject};
 use suitcap::camera::Camera;
 use suitcap::raster::{draw_triangle, Cull, DepthBuffer, ScreenVertex};
 use suitcap::suit::SuitDefinition;
@@ -94,6 +94,7 @@ pub struct BodyRenderer<'a> {
     pub body: &'a Body,
     pub camera: Camera,
     meshes: Vec<PartMesh>,
+    grids: Vec<MarkerGrid>,
     /// Every marker of the suit on this body: (part index, cell).
     pub markers: Vec<(usize, MarkerCell)>,
     marker_index: HashMap<u32, u32>,
@@ -106,6 +107,7 @@ pub struct BodyRenderer<'a> {
 impl<'a> BodyRenderer<'a> {
     pub fn new(suit: &'a SuitDefinition, subject: &Subject, body: &'a Body, camera: Camera) -> BodyRenderer<'a> {
         let meshes = body.parts.iter().map(|p| p.mesh(24, 4.0)).collect();
+        let grids = body.parts.iter().map(|p| p.marker_grid(suit)).collect();
         let markers: Vec<(usize, MarkerCell)> = body
             .parts
             .iter()
@@ -118,6 +120,7 @@ impl<'a> BodyRenderer<'a> {
             body,
             camera,
             meshes,
+            grids,
             markers,
             marker_index,
             suit_albedo: suit.background.hsv.to_rgb(),
@@ -133,7 +136,7 @@ impl<'a> BodyRenderer<'a> {
         let light = lighting.direction.normalize_or(Vec3::Y);
         let mut screen: Vec<ScreenVertex> = Vec::new();
         let mut normals: Vec<Vec3> = Vec::new();
-        for (part_index, (part, mesh)) in self.body.parts.iter().zip(&self.meshes).enumerate() {
+        for ((part, mesh), grid) in self.body.parts.iter().zip(&self.meshes).zip(&self.grids) {
             let transform = world[part.joint];
             screen.clear();
             normals.clear();
@@ -162,7 +165,7 @@ impl<'a> BodyRenderer<'a> {
                     if part.material == Material::Suit {
                         let u = w[0] * va.u + w[1] * vb.u + w[2] * vc.u;
                         let s = w[0] * va.s + w[1] * vb.s + w[2] * vc.s;
-                        if let Some(cell) = part.marker_at(self.suit, u, s) {
+                        if let Some(cell) = grid.marker_at(u, s) {
                             albedo = self.marker_albedo[cell.colour];
                             marker = self.marker_index.get(&cell.id).copied().unwrap_or(NO_MARKER);
                         }
@@ -174,7 +177,6 @@ impl<'a> BodyRenderer<'a> {
                     layer.marker[f.index] = marker;
                 });
             }
-            let _ = part_index;
         }
     }
 
