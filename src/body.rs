@@ -47,12 +47,60 @@ pub struct Subject {
 
 /// The built-in subjects the generator renders, selectable by name or index.
 pub const SUBJECTS: [Subject; 6] = [
-    Subject { name: "ana", height_cm: 158.0, girth: 0.92, arm_ratio: 1.00, leg_ratio: 0.97, skin: [0.87, 0.68, 0.58], shoe: [0.06, 0.06, 0.07] },
-    Subject { name: "ben", height_cm: 186.0, girth: 1.12, arm_ratio: 1.03, leg_ratio: 1.02, skin: [0.62, 0.44, 0.32], shoe: [0.10, 0.08, 0.07] },
-    Subject { name: "chidi", height_cm: 176.0, girth: 1.00, arm_ratio: 1.05, leg_ratio: 1.05, skin: [0.36, 0.24, 0.18], shoe: [0.05, 0.05, 0.05] },
-    Subject { name: "dana", height_cm: 165.0, girth: 1.22, arm_ratio: 0.97, leg_ratio: 0.95, skin: [0.78, 0.58, 0.44], shoe: [0.12, 0.10, 0.10] },
-    Subject { name: "emil", height_cm: 193.0, girth: 0.95, arm_ratio: 1.04, leg_ratio: 1.08, skin: [0.93, 0.76, 0.68], shoe: [0.08, 0.08, 0.10] },
-    Subject { name: "fumiko", height_cm: 152.0, girth: 0.90, arm_ratio: 0.98, leg_ratio: 0.96, skin: [0.90, 0.74, 0.60], shoe: [0.15, 0.12, 0.12] },
+    Subject {
+        name: "ana",
+        height_cm: 158.0,
+        girth: 0.92,
+        arm_ratio: 1.00,
+        leg_ratio: 0.97,
+        skin: [0.87, 0.68, 0.58],
+        shoe: [0.06, 0.06, 0.07],
+    },
+    Subject {
+        name: "ben",
+        height_cm: 186.0,
+        girth: 1.12,
+        arm_ratio: 1.03,
+        leg_ratio: 1.02,
+        skin: [0.62, 0.44, 0.32],
+        shoe: [0.10, 0.08, 0.07],
+    },
+    Subject {
+        name: "chidi",
+        height_cm: 176.0,
+        girth: 1.00,
+        arm_ratio: 1.05,
+        leg_ratio: 1.05,
+        skin: [0.36, 0.24, 0.18],
+        shoe: [0.05, 0.05, 0.05],
+    },
+    Subject {
+        name: "dana",
+        height_cm: 165.0,
+        girth: 1.22,
+        arm_ratio: 0.97,
+        leg_ratio: 0.95,
+        skin: [0.78, 0.58, 0.44],
+        shoe: [0.12, 0.10, 0.10],
+    },
+    Subject {
+        name: "emil",
+        height_cm: 193.0,
+        girth: 0.95,
+        arm_ratio: 1.04,
+        leg_ratio: 1.08,
+        skin: [0.93, 0.76, 0.68],
+        shoe: [0.08, 0.08, 0.10],
+    },
+    Subject {
+        name: "fumiko",
+        height_cm: 152.0,
+        girth: 0.90,
+        arm_ratio: 0.98,
+        leg_ratio: 0.96,
+        skin: [0.90, 0.74, 0.60],
+        shoe: [0.15, 0.12, 0.12],
+    },
 ];
 
 impl Subject {
@@ -61,7 +109,9 @@ impl Subject {
         if let Ok(index) = name_or_index.parse::<usize>() {
             return SUBJECTS.get(index);
         }
-        SUBJECTS.iter().find(|s| s.name.eq_ignore_ascii_case(name_or_index))
+        SUBJECTS
+            .iter()
+            .find(|s| s.name.eq_ignore_ascii_case(name_or_index))
     }
 
     fn height_scale(&self) -> f32 {
@@ -72,7 +122,10 @@ impl Subject {
     fn bone_scale(&self, skeleton: &Skeleton, index: usize) -> f32 {
         let h = self.height_scale();
         let in_subtree = |names: &[&str]| {
-            names.iter().filter_map(|n| skeleton.find(n)).any(|root| skeleton.is_ancestor(root, index))
+            names
+                .iter()
+                .filter_map(|n| skeleton.find(n))
+                .any(|root| skeleton.is_ancestor(root, index))
         };
         if in_subtree(&["rShldr", "lShldr"]) {
             h * self.arm_ratio
@@ -85,7 +138,9 @@ impl Subject {
 
     /// The mocap skeleton with this subject's bone lengths.
     pub fn scale_skeleton(&self, skeleton: &Skeleton) -> Skeleton {
-        let scales: Vec<f32> = (0..skeleton.len()).map(|i| self.bone_scale(skeleton, i)).collect();
+        let scales: Vec<f32> = (0..skeleton.len())
+            .map(|i| self.bone_scale(skeleton, i))
+            .collect();
         skeleton.map_offsets(|i, offset| offset * scales[i])
     }
 
@@ -178,7 +233,13 @@ impl MarkerGrid {
         let columns = self.rows[row as usize].0;
         MarkerCell {
             id: self.surface * 10_000 + row * 100 + column,
-            colour: crate::suit::layout_colour(self.layout_seed, self.colours, self.surface, row as i32, column),
+            colour: crate::suit::layout_colour(
+                self.layout_seed,
+                self.colours,
+                self.surface,
+                row as i32,
+                column,
+            ),
             row,
             column,
             centre_u: self.first_row_u + (row as f32 + 0.5) * self.pitch,
@@ -208,7 +269,9 @@ impl MarkerGrid {
 
     /// Every marker of the grid, row by row.
     pub fn cells(&self) -> impl Iterator<Item = MarkerCell> + '_ {
-        (0..self.rows.len() as u32).flat_map(move |row| (0..self.rows[row as usize].0).map(move |column| self.cell(row, column)))
+        (0..self.rows.len() as u32).flat_map(move |row| {
+            (0..self.rows[row as usize].0).map(move |column| self.cell(row, column))
+        })
     }
 }
 
@@ -268,9 +331,15 @@ impl BodyPart {
         let r = self.radii_at(u);
         let table = ellipse_arc_table(r.x, r.y);
         let target = s.rem_euclid(1.0) * table[4 * ARC_STEPS];
-        let i = table.partition_point(|&a| a < target).clamp(1, 4 * ARC_STEPS);
+        let i = table
+            .partition_point(|&a| a < target)
+            .clamp(1, 4 * ARC_STEPS);
         let (a0, a1) = (table[i - 1], table[i]);
-        let frac = if a1 > a0 { (target - a0) / (a1 - a0) } else { 0.0 };
+        let frac = if a1 > a0 {
+            (target - a0) / (a1 - a0)
+        } else {
+            0.0
+        };
         (i as f32 - 1.0 + frac) * TAU / (4 * ARC_STEPS) as f32
     }
 
@@ -319,13 +388,28 @@ impl BodyPart {
                 };
                 let step = k * ARC_STEPS * 4 / around;
                 let s = table[step.min(4 * ARC_STEPS)] / table[4 * ARC_STEPS];
-                vertices.push(SurfaceVertex { position, normal, u, s });
+                vertices.push(SurfaceVertex {
+                    position,
+                    normal,
+                    u,
+                    s,
+                });
             }
         }
         // Poles closing both caps.
         let first_pole = vertices.len() as u32;
-        vertices.push(SurfaceVertex { position: self.start - d * cap_start, normal: -d, u: -cap_start, s: 0.0 });
-        vertices.push(SurfaceVertex { position: self.end + d * cap_end, normal: d, u: length + cap_end, s: 0.0 });
+        vertices.push(SurfaceVertex {
+            position: self.start - d * cap_start,
+            normal: -d,
+            u: -cap_start,
+            s: 0.0,
+        });
+        vertices.push(SurfaceVertex {
+            position: self.end + d * cap_end,
+            normal: d,
+            u: length + cap_end,
+            s: 0.0,
+        });
 
         let stride = (around + 1) as u32;
         let mut triangles = Vec::with_capacity(2 * rings.len() * around + 2 * around);
@@ -354,7 +438,10 @@ impl BodyPart {
             push([first_pole, k, k + 1]);
             push([first_pole + 1, last_ring + k, last_ring + k + 1]);
         }
-        PartMesh { vertices, triangles }
+        PartMesh {
+            vertices,
+            triangles,
+        }
     }
 
     /// The marker grid of this part for `suit`: rows along the straight section, each with its own
@@ -362,12 +449,19 @@ impl BodyPart {
     pub fn marker_grid(&self, suit: &SuitDefinition) -> MarkerGrid {
         let pitch = suit.pitch_cm();
         let length = self.length();
-        let rows = if self.material == Material::Suit { (length / pitch).floor() as u32 } else { 0 };
+        let rows = if self.material == Material::Suit {
+            (length / pitch).floor() as u32
+        } else {
+            0
+        };
         let first_row_u = (length - rows as f32 * pitch) * 0.5;
         let rows = (0..rows)
             .map(|row| {
                 let circumference = self.circumference_at(first_row_u + (row as f32 + 0.5) * pitch);
-                (((circumference / pitch).floor() as u32).max(1), circumference)
+                (
+                    ((circumference / pitch).floor() as u32).max(1),
+                    circumference,
+                )
             })
             .collect();
         MarkerGrid {
@@ -399,12 +493,21 @@ impl BodyPart {
         let ds = half / self.circumference_at(cell.centre_u);
         let point = |du: f32, dsf: f32| {
             let u = cell.centre_u + du;
-            self.surface_point(u, self.theta_for(u, cell.centre_s + dsf)).0
+            self.surface_point(u, self.theta_for(u, cell.centre_s + dsf))
+                .0
         };
-        let corners = [point(-half, -ds), point(-half, ds), point(half, ds), point(half, -ds)];
+        let corners = [
+            point(-half, -ds),
+            point(-half, ds),
+            point(half, ds),
+            point(half, -ds),
+        ];
         let corners = if (corners[1] - corners[0])
             .cross(corners[2] - corners[0])
-            .dot(self.surface_point(cell.centre_u, self.theta_for(cell.centre_u, cell.centre_s)).1)
+            .dot(
+                self.surface_point(cell.centre_u, self.theta_for(cell.centre_u, cell.centre_s))
+                    .1,
+            )
             >= 0.0
         {
             corners
@@ -442,13 +545,26 @@ impl Body {
     /// Builds the subject's parts on `skeleton`, which must already be scaled by
     /// [`Subject::scale_skeleton`].
     pub fn new(subject: &Subject, skeleton: &Skeleton) -> Result<Body, MissingJoint> {
-        let find = |name: &str| skeleton.find(name).ok_or_else(|| MissingJoint(name.to_owned()));
-        let offset = |name: &str| -> Result<Vec3, MissingJoint> { Ok(skeleton.joint(find(name)?).offset) };
+        let find = |name: &str| {
+            skeleton
+                .find(name)
+                .ok_or_else(|| MissingJoint(name.to_owned()))
+        };
+        let offset =
+            |name: &str| -> Result<Vec3, MissingJoint> { Ok(skeleton.joint(find(name)?).offset) };
         let h = subject.height_scale();
         let g = subject.girth * h;
         let r = |a: f32, b: f32| Vec2::new(a, b) * g;
         let mut parts = Vec::new();
-        let mut add = |name, joint: &str, start: Vec3, end: Vec3, rs: Vec2, re: Vec2, width_axis: Vec3, cap: f32, material| {
+        let mut add = |name,
+                       joint: &str,
+                       start: Vec3,
+                       end: Vec3,
+                       rs: Vec2,
+                       re: Vec2,
+                       width_axis: Vec3,
+                       cap: f32,
+                       material| {
             let surface = parts.len() as u32;
             parts.push(BodyPart {
                 name,
@@ -468,26 +584,162 @@ impl Body {
         let abdomen = offset("abdomen")?;
         let chest = offset("chest")?;
         let neck = offset("neck")?;
-        add("pelvis", "hip", Vec3::new(0.0, -7.0, 0.5) * h, abdomen, r(15.5, 10.5), r(13.8, 9.6), Vec3::X, 0.7, Suit)?;
-        add("abdomen", "abdomen", Vec3::ZERO, chest, r(13.8, 9.6), r(14.8, 10.0), Vec3::X, 0.5, Suit)?;
-        add("chest", "chest", Vec3::ZERO, neck * 0.86, r(15.2, 10.2), r(16.5, 9.5), Vec3::X, 0.55, Suit)?;
-        add("neck", "neck", Vec3::ZERO, offset("head")?, r(5.4, 5.4), r(5.0, 5.0), Vec3::X, 1.0, Skin)?;
-        add("head", "head", Vec3::new(0.0, 3.0, 1.5) * h, Vec3::new(0.0, 11.0, 1.5) * h, r(7.6, 9.0), r(7.6, 9.0), Vec3::X, 1.0, Skin)?;
+        add(
+            "pelvis",
+            "hip",
+            Vec3::new(0.0, -7.0, 0.5) * h,
+            abdomen,
+            r(15.5, 10.5),
+            r(13.8, 9.6),
+            Vec3::X,
+            0.7,
+            Suit,
+        )?;
+        add(
+            "abdomen",
+            "abdomen",
+            Vec3::ZERO,
+            chest,
+            r(13.8, 9.6),
+            r(14.8, 10.0),
+            Vec3::X,
+            0.5,
+            Suit,
+        )?;
+        add(
+            "chest",
+            "chest",
+            Vec3::ZERO,
+            neck * 0.86,
+            r(15.2, 10.2),
+            r(16.5, 9.5),
+            Vec3::X,
+            0.55,
+            Suit,
+        )?;
+        add(
+            "neck",
+            "neck",
+            Vec3::ZERO,
+            offset("head")?,
+            r(5.4, 5.4),
+            r(5.0, 5.0),
+            Vec3::X,
+            1.0,
+            Skin,
+        )?;
+        add(
+            "head",
+            "head",
+            Vec3::new(0.0, 3.0, 1.5) * h,
+            Vec3::new(0.0, 11.0, 1.5) * h,
+            r(7.6, 9.0),
+            r(7.6, 9.0),
+            Vec3::X,
+            1.0,
+            Skin,
+        )?;
         for side in ["r", "l"] {
             let j = |n: &str| format!("{side}{n}");
             let hand = offset(&j("Hand"))?;
-            add(if side == "r" { "right_upper_arm" } else { "left_upper_arm" }, &j("Shldr"), Vec3::ZERO, offset(&j("ForeArm"))?, r(5.4, 5.4), r(4.3, 4.3), Vec3::Z, 1.0, Suit)?;
-            add(if side == "r" { "right_forearm" } else { "left_forearm" }, &j("ForeArm"), Vec3::ZERO, hand, r(4.2, 4.2), r(3.0, 3.0), Vec3::Z, 1.0, Suit)?;
+            add(
+                if side == "r" {
+                    "right_upper_arm"
+                } else {
+                    "left_upper_arm"
+                },
+                &j("Shldr"),
+                Vec3::ZERO,
+                offset(&j("ForeArm"))?,
+                r(5.4, 5.4),
+                r(4.3, 4.3),
+                Vec3::Z,
+                1.0,
+                Suit,
+            )?;
+            add(
+                if side == "r" {
+                    "right_forearm"
+                } else {
+                    "left_forearm"
+                },
+                &j("ForeArm"),
+                Vec3::ZERO,
+                hand,
+                r(4.2, 4.2),
+                r(3.0, 3.0),
+                Vec3::Z,
+                1.0,
+                Suit,
+            )?;
             let hand_dir = hand.normalize_or(Vec3::X);
-            add(if side == "r" { "right_hand" } else { "left_hand" }, &j("Hand"), hand_dir * 1.0, hand_dir * 14.0 * h * subject.arm_ratio, r(4.3, 1.8), r(3.8, 1.5), Vec3::Z, 1.0, Skin)?;
-            add(if side == "r" { "right_thigh" } else { "left_thigh" }, &j("Thigh"), Vec3::ZERO, offset(&j("Shin"))?, r(8.4, 8.0), r(5.6, 5.4), Vec3::X, 1.0, Suit)?;
-            add(if side == "r" { "right_shin" } else { "left_shin" }, &j("Shin"), Vec3::ZERO, offset(&j("Foot"))?, r(5.3, 5.3), r(3.9, 3.9), Vec3::X, 1.0, Suit)?;
-            let toe = skeleton.joint(find(&j("Foot"))?).end_site.unwrap_or(Vec3::new(0.0, -3.7, 12.1) * h);
-            add(if side == "r" { "right_foot" } else { "left_foot" }, &j("Foot"), Vec3::new(0.0, -3.6, -3.5) * h, toe + Vec3::new(0.0, 0.6, 0.0) * h, r(4.4, 3.4), r(4.0, 2.6), Vec3::X, 1.0, Shoe)?;
+            add(
+                if side == "r" {
+                    "right_hand"
+                } else {
+                    "left_hand"
+                },
+                &j("Hand"),
+                hand_dir * 1.0,
+                hand_dir * 14.0 * h * subject.arm_ratio,
+                r(4.3, 1.8),
+                r(3.8, 1.5),
+                Vec3::Z,
+                1.0,
+                Skin,
+            )?;
+            add(
+                if side == "r" {
+                    "right_thigh"
+                } else {
+                    "left_thigh"
+                },
+                &j("Thigh"),
+                Vec3::ZERO,
+                offset(&j("Shin"))?,
+                r(8.4, 8.0),
+                r(5.6, 5.4),
+                Vec3::X,
+                1.0,
+                Suit,
+            )?;
+            add(
+                if side == "r" {
+                    "right_shin"
+                } else {
+                    "left_shin"
+                },
+                &j("Shin"),
+                Vec3::ZERO,
+                offset(&j("Foot"))?,
+                r(5.3, 5.3),
+                r(3.9, 3.9),
+                Vec3::X,
+                1.0,
+                Suit,
+            )?;
+            let toe = skeleton
+                .joint(find(&j("Foot"))?)
+                .end_site
+                .unwrap_or(Vec3::new(0.0, -3.7, 12.1) * h);
+            add(
+                if side == "r" {
+                    "right_foot"
+                } else {
+                    "left_foot"
+                },
+                &j("Foot"),
+                Vec3::new(0.0, -3.6, -3.5) * h,
+                toe + Vec3::new(0.0, 0.6, 0.0) * h,
+                r(4.4, 3.4),
+                r(4.0, 2.6),
+                Vec3::X,
+                1.0,
+                Shoe,
+            )?;
         }
         Ok(Body { parts })
     }
-}
 }
 
 #[cfg(test)]
@@ -496,7 +748,8 @@ mod tests {
     use std::path::Path;
 
     fn suit() -> SuitDefinition {
-        SuitDefinition::load_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default")).expect("suit")
+        SuitDefinition::load_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"))
+            .expect("suit")
     }
 
     fn cylinder() -> BodyPart {
@@ -522,7 +775,8 @@ mod tests {
         let table = ellipse_arc_table(15.0, 10.0);
         let (a, b) = (15.0f32, 10.0f32);
         let h = ((a - b) / (a + b)).powi(2);
-        let ramanujan = std::f32::consts::PI * (a + b) * (1.0 + 3.0 * h / (10.0 + (4.0 - 3.0 * h).sqrt()));
+        let ramanujan =
+            std::f32::consts::PI * (a + b) * (1.0 + 3.0 * h / (10.0 + (4.0 - 3.0 * h).sqrt()));
         assert!((table[4 * ARC_STEPS] - ramanujan).abs() < 0.05);
     }
 
@@ -574,7 +828,10 @@ mod tests {
         // Every vertex lies on the capsule: within r of the segment.
         for v in &mesh.vertices {
             let axis_point = Vec3::new(0.0, v.position.y.clamp(0.0, 30.0), 0.0);
-            assert!((v.position.distance(axis_point) - 10.0).abs() < 0.05, "{v:?}");
+            assert!(
+                (v.position.distance(axis_point) - 10.0).abs() < 0.05,
+                "{v:?}"
+            );
         }
     }
 
@@ -585,7 +842,8 @@ mod tests {
         let tall = Subject::find("emil").expect("emil");
         let scaled = tall.scale_skeleton(&motion.skeleton);
         let shin = motion.skeleton.find("rShin").expect("rShin");
-        let ratio = scaled.joint(shin).offset.length() / motion.skeleton.joint(shin).offset.length();
+        let ratio =
+            scaled.joint(shin).offset.length() / motion.skeleton.joint(shin).offset.length();
         assert!((ratio - 193.0 / BASE_HEIGHT_CM * 1.08).abs() < 1e-4);
         let body = Body::new(tall, &scaled).expect("body");
         assert_eq!(body.parts.len(), 17);

@@ -33,21 +33,46 @@ pub struct Motion {
 #[derive(Debug, thiserror::Error)]
 pub enum BvhError {
     #[error("{path}: cannot read: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: not a valid BVH file{}: {message}", line.map(|l| format!(" (line {l})")).unwrap_or_default())]
-    Parse { path: PathBuf, line: Option<usize>, message: String },
-    #[error("{path}: frame {frame}, channel {channel} ({joint} {channel_name}) is not a finite number")]
-    NotFinite { path: PathBuf, frame: usize, channel: usize, joint: String, channel_name: &'static str },
+    Parse {
+        path: PathBuf,
+        line: Option<usize>,
+        message: String,
+    },
+    #[error(
+        "{path}: frame {frame}, channel {channel} ({joint} {channel_name}) is not a finite number"
+    )]
+    NotFinite {
+        path: PathBuf,
+        frame: usize,
+        channel: usize,
+        joint: String,
+        channel_name: &'static str,
+    },
     #[error("{path}: frame time {frame_time} s is not a positive number")]
     FrameTime { path: PathBuf, frame_time: f64 },
     #[error("{path}: the file holds no frames")]
     NoFrames { path: PathBuf },
     #[error("{path}: invalid hierarchy: {source}")]
-    Hierarchy { path: PathBuf, source: SkeletonError },
+    Hierarchy {
+        path: PathBuf,
+        source: SkeletonError,
+    },
     #[error("frame {frame} has {got} values, the skeleton has {expected} channels")]
-    FrameLength { frame: usize, got: usize, expected: usize },
+    FrameLength {
+        frame: usize,
+        got: usize,
+        expected: usize,
+    },
     #[error("{path}: cannot write: {source}")]
-    Write { path: PathBuf, source: std::io::Error },
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
 }
 
 /// Why a clip cannot be resampled as asked.
@@ -58,7 +83,14 @@ pub enum ResampleError {
     #[error("start frame {start} is past the clip's last frame {last}")]
     StartPastEnd { start: usize, last: usize },
     #[error("{wanted} frames at {fps} frames/s from frame {start} need source frame {needed}, the clip ends at {last}: at most {available} frames fit")]
-    TooLong { wanted: usize, fps: f64, start: usize, needed: usize, last: usize, available: usize },
+    TooLong {
+        wanted: usize,
+        fps: f64,
+        start: usize,
+        needed: usize,
+        last: usize,
+        available: usize,
+    },
 }
 
 impl Motion {
@@ -72,13 +104,19 @@ impl Motion {
                 expected: channels,
             });
         }
-        Ok(Motion { skeleton, frame_time, values })
+        Ok(Motion {
+            skeleton,
+            frame_time,
+            values,
+        })
     }
 
     /// Reads a BVH file; errors name the file and, where the parser knows it, the line.
     pub fn load(path: &Path) -> Result<Motion, BvhError> {
-        let bytes =
-            std::fs::read(path).map_err(|source| BvhError::Io { path: path.to_owned(), source })?;
+        let bytes = std::fs::read(path).map_err(|source| BvhError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
         Motion::parse(&bytes, path)
     }
 
@@ -116,12 +154,17 @@ impl Motion {
             });
             first_channel += data.channels().len();
         }
-        let skeleton = Skeleton::new(joints)
-            .map_err(|source| BvhError::Hierarchy { path: path.to_owned(), source })?;
+        let skeleton = Skeleton::new(joints).map_err(|source| BvhError::Hierarchy {
+            path: path.to_owned(),
+            source,
+        })?;
 
         let frame_time = bvh.frame_time().as_secs_f64();
         if !(frame_time > 0.0 && frame_time.is_finite()) {
-            return Err(BvhError::FrameTime { path: path.to_owned(), frame_time });
+            return Err(BvhError::FrameTime {
+                path: path.to_owned(),
+                frame_time,
+            });
         }
         let channel_count = skeleton.channel_count();
         let mut values = Vec::with_capacity(bvh.frames().len() * channel_count);
@@ -130,7 +173,10 @@ impl Motion {
             if slice.len() != channel_count {
                 return Err(parse_error(
                     None,
-                    format!("frame {frame} has {} values, expected {channel_count}", slice.len()),
+                    format!(
+                        "frame {frame} has {} values, expected {channel_count}",
+                        slice.len()
+                    ),
                 ));
             }
             if let Some(channel) = slice.iter().position(|v| !v.is_finite()) {
@@ -146,9 +192,15 @@ impl Motion {
             values.extend_from_slice(slice);
         }
         if values.is_empty() {
-            return Err(BvhError::NoFrames { path: path.to_owned() });
+            return Err(BvhError::NoFrames {
+                path: path.to_owned(),
+            });
         }
-        Ok(Motion { skeleton, frame_time, values })
+        Ok(Motion {
+            skeleton,
+            frame_time,
+            values,
+        })
     }
 
     pub fn frame_count(&self) -> usize {
@@ -170,7 +222,8 @@ impl Motion {
     }
 
     pub fn frames(&self) -> impl ExactSizeIterator<Item = &[f32]> + '_ {
-        self.values.chunks_exact(self.skeleton.channel_count().max(1))
+        self.values
+            .chunks_exact(self.skeleton.channel_count().max(1))
     }
 
     /// All values, frame-major.
@@ -182,7 +235,11 @@ impl Motion {
     pub fn push_frame(&mut self, frame: &[f32]) -> Result<(), BvhError> {
         let expected = self.skeleton.channel_count();
         if frame.len() != expected {
-            return Err(BvhError::FrameLength { frame: self.frame_count(), got: frame.len(), expected });
+            return Err(BvhError::FrameLength {
+                frame: self.frame_count(),
+                got: frame.len(),
+                expected,
+            });
         }
         self.values.extend_from_slice(frame);
         Ok(())
@@ -210,7 +267,9 @@ impl Motion {
         if start > last {
             return Err(ResampleError::StartPastEnd { start, last });
         }
-        let available = (0..).take_while(|&k| self.source_frame_for(start, k, fps) <= last).count();
+        let available = (0..)
+            .take_while(|&k| self.source_frame_for(start, k, fps) <= last)
+            .count();
         let count = match count {
             Some(wanted) if wanted > available => {
                 return Err(ResampleError::TooLong {
@@ -225,12 +284,18 @@ impl Motion {
             Some(wanted) => wanted,
             None => available,
         };
-        let sources: Vec<usize> = (0..count).map(|k| self.source_frame_for(start, k, fps)).collect();
+        let sources: Vec<usize> = (0..count)
+            .map(|k| self.source_frame_for(start, k, fps))
+            .collect();
         let mut values = Vec::with_capacity(count * self.skeleton.channel_count());
         for &s in &sources {
             values.extend_from_slice(self.frame(s));
         }
-        let motion = Motion { skeleton: self.skeleton.clone(), frame_time: 1.0 / fps, values };
+        let motion = Motion {
+            skeleton: self.skeleton.clone(),
+            frame_time: 1.0 / fps,
+            values,
+        };
         Ok((motion, sources))
     }
 
@@ -241,7 +306,11 @@ impl Motion {
         for frame in values.chunks_exact_mut(self.skeleton.channel_count().max(1)) {
             f(frame);
         }
-        Motion { skeleton, frame_time: self.frame_time, values }
+        Motion {
+            skeleton,
+            frame_time: self.frame_time,
+            values,
+        }
     }
 
     /// The BVH text of this motion.
@@ -268,7 +337,11 @@ impl Motion {
             }
             let depth = depth_of(index);
             let pad = "\t".repeat(depth);
-            let keyword = if joint.parent.is_none() { "ROOT" } else { "JOINT" };
+            let keyword = if joint.parent.is_none() {
+                "ROOT"
+            } else {
+                "JOINT"
+            };
             let _ = writeln!(out, "{pad}{keyword} {}", joint.name);
             let _ = writeln!(out, "{pad}{{");
             let _ = writeln!(out, "{pad}\tOFFSET {}", format_vec(joint.offset));
@@ -293,8 +366,12 @@ impl Motion {
     /// Writes the motion as BVH to `path` through a temporary file and a rename, so that an
     /// interrupted write never leaves a truncated file behind.
     pub fn write(&self, path: &Path) -> Result<(), BvhError> {
-        crate::io::write_atomic(path, self.to_bvh_string().as_bytes())
-            .map_err(|source| BvhError::Write { path: path.to_owned(), source })
+        crate::io::write_atomic(path, self.to_bvh_string().as_bytes()).map_err(|source| {
+            BvhError::Write {
+                path: path.to_owned(),
+                source,
+            }
+        })
     }
 }
 
@@ -310,7 +387,12 @@ fn close_joint(out: &mut String, joints: &[Joint], index: usize, depth: usize) {
 }
 
 fn format_vec(v: Vec3) -> String {
-    format!("{} {} {}", format_number(v.x), format_number(v.y), format_number(v.z))
+    format!(
+        "{} {} {}",
+        format_number(v.x),
+        format_number(v.y),
+        format_number(v.z)
+    )
 }
 
 /// Six decimals, trailing zeros trimmed: exact to 5e-7 and short for the many zeros of a mocap file.
@@ -346,7 +428,10 @@ fn convert_channel(channel: bvh_anim::ChannelType) -> Channel {
 fn channel_owner(skeleton: &Skeleton, channel: usize) -> (String, &'static str) {
     for joint in skeleton.joints() {
         if channel >= joint.first_channel && channel < joint.first_channel + joint.channels.len() {
-            return (joint.name.clone(), joint.channels[channel - joint.first_channel].name());
+            return (
+                joint.name.clone(),
+                joint.channels[channel - joint.first_channel].name(),
+            );
         }
     }
     (String::from("?"), "?")
@@ -369,7 +454,10 @@ mod tests {
         let m = tiny();
         assert_eq!(m.frame_count(), 3);
         assert_eq!(m.skeleton.len(), 2);
-        assert_eq!(m.skeleton.joint(1).end_site, Some(Vec3::new(0.0, -45.0, 0.0)));
+        assert_eq!(
+            m.skeleton.joint(1).end_site,
+            Some(Vec3::new(0.0, -45.0, 0.0))
+        );
         assert_eq!(m.frame(1)[7], 0.25);
         assert!((m.frame_rate() - 120.0).abs() < 0.01);
     }
@@ -390,9 +478,15 @@ mod tests {
         let m = Motion::load(&path).expect("shipped clip loads");
         assert_eq!(m.skeleton.len(), 43);
         assert_eq!(m.skeleton.channel_count(), 132);
-        let back = Motion::parse(m.to_bvh_string().as_bytes(), Path::new("back.bvh")).expect("back");
+        let back =
+            Motion::parse(m.to_bvh_string().as_bytes(), Path::new("back.bvh")).expect("back");
         assert_eq!(back.frame_count(), m.frame_count());
-        let worst = back.values().iter().zip(m.values()).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+        let worst = back
+            .values()
+            .iter()
+            .zip(m.values())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f32::max);
         assert!(worst < 1e-5, "worst difference {worst}");
     }
 
@@ -416,7 +510,9 @@ mod tests {
     #[test]
     fn resampling_120_to_30_takes_every_fourth_frame() {
         let skeleton = two_joint_arm();
-        let values: Vec<f32> = (0..100).flat_map(|f| std::iter::repeat(f as f32).take(9)).collect();
+        let values: Vec<f32> = (0..100)
+            .flat_map(|f| std::iter::repeat(f as f32).take(9))
+            .collect();
         let m = Motion::new(skeleton, 1.0 / 120.0, values).expect("motion");
         let (r, sources) = m.resample(10, Some(5), 30.0).expect("fits");
         assert_eq!(sources, vec![10, 14, 18, 22, 26]);
@@ -432,8 +528,14 @@ mod tests {
         // k/25 s × 120 = 4.8 k → 0, 4.8, 9.6, 14.4, 19.2, 24, 28.8, … rounded.
         assert_eq!(&sources[..8], &[0, 5, 10, 14, 19, 24, 29, 34]);
         assert_eq!(*sources.last().expect("some"), 58);
-        assert!(matches!(m.resample(0, Some(20), 25.0), Err(ResampleError::TooLong { available: 13, .. })));
-        assert!(matches!(m.resample(60, None, 25.0), Err(ResampleError::StartPastEnd { .. })));
+        assert!(matches!(
+            m.resample(0, Some(20), 25.0),
+            Err(ResampleError::TooLong { available: 13, .. })
+        ));
+        assert!(matches!(
+            m.resample(60, None, 25.0),
+            Err(ResampleError::StartPastEnd { .. })
+        ));
     }
 
     proptest! {

@@ -27,7 +27,14 @@ impl Intrinsics {
     /// Square pixels, principal point at the image centre, `horizontal_fov_deg` across the width.
     pub fn from_fov(width: u32, height: u32, horizontal_fov_deg: f32) -> Intrinsics {
         let f = width as f32 * 0.5 / (horizontal_fov_deg.to_radians() * 0.5).tan();
-        Intrinsics { width, height, fx: f, fy: f, cx: width as f32 * 0.5, cy: height as f32 * 0.5 }
+        Intrinsics {
+            width,
+            height,
+            fx: f,
+            fy: f,
+            cx: width as f32 * 0.5,
+            cy: height as f32 * 0.5,
+        }
     }
 }
 
@@ -54,11 +61,18 @@ pub struct Projected {
 #[derive(Debug, thiserror::Error)]
 pub enum CameraError {
     #[error("{path}: cannot read: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: {message}")]
     Format { path: PathBuf, message: String },
     #[error("{path}: field {field}: {message}")]
-    Field { path: PathBuf, field: &'static str, message: String },
+    Field {
+        path: PathBuf,
+        field: &'static str,
+        message: String,
+    },
 }
 
 #[derive(Serialize, Deserialize)]
@@ -86,7 +100,11 @@ impl Camera {
         let right = forward.cross(up).normalize();
         let down = forward.cross(right);
         let rotation = Mat3::from_cols(right, down, forward).transpose();
-        Camera { intrinsics, rotation, translation: -(rotation * eye) }
+        Camera {
+            intrinsics,
+            rotation,
+            translation: -(rotation * eye),
+        }
     }
 
     /// Camera centre in world coordinates.
@@ -105,7 +123,10 @@ impl Camera {
             return None;
         }
         let k = &self.intrinsics;
-        Some(Projected { pixel: Vec2::new(k.fx * p.x / p.z + k.cx, k.fy * p.y / p.z + k.cy), depth: p.z })
+        Some(Projected {
+            pixel: Vec2::new(k.fx * p.x / p.z + k.cx, k.fy * p.y / p.z + k.cy),
+            depth: p.z,
+        })
     }
 
     /// World point → pixel, or `None` behind the camera.
@@ -116,7 +137,11 @@ impl Camera {
     /// World point seen at `pixel` at `depth` along the optical axis (inverse of [`Camera::project`]).
     pub fn unproject(&self, pixel: Vec2, depth: f32) -> Vec3 {
         let k = &self.intrinsics;
-        let p = Vec3::new((pixel.x - k.cx) / k.fx * depth, (pixel.y - k.cy) / k.fy * depth, depth);
+        let p = Vec3::new(
+            (pixel.x - k.cx) / k.fx * depth,
+            (pixel.y - k.cy) / k.fy * depth,
+            depth,
+        );
         self.rotation.transpose() * (p - self.translation)
     }
 
@@ -126,7 +151,11 @@ impl Camera {
         let file = CameraFile {
             intrinsics: self.intrinsics,
             extrinsics: ExtrinsicsFile {
-                rotation: [r.x_axis.to_array(), r.y_axis.to_array(), r.z_axis.to_array()],
+                rotation: [
+                    r.x_axis.to_array(),
+                    r.y_axis.to_array(),
+                    r.z_axis.to_array(),
+                ],
                 translation: self.translation.to_array(),
                 position: self.position().to_array(),
             },
@@ -141,15 +170,19 @@ impl Camera {
 
     /// Reads and validates a `camera.toml`.
     pub fn load(path: &Path) -> Result<Camera, CameraError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| CameraError::Io { path: path.to_owned(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| CameraError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
         Camera::parse(&text, path)
     }
 
     /// Parses and validates `camera.toml` text; `path` names the source in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Camera, CameraError> {
-        let file: CameraFile = toml::from_str(text)
-            .map_err(|e| CameraError::Format { path: path.to_owned(), message: e.to_string() })?;
+        let file: CameraFile = toml::from_str(text).map_err(|e| CameraError::Format {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
         let field = |field: &'static str, message: String| CameraError::Field {
             path: path.to_owned(),
             field,
@@ -179,14 +212,21 @@ impl Camera {
         if !(orthonormality < 1e-3) || rotation.determinant() <= 0.0 {
             return Err(field(
                 "extrinsics.rotation",
-                format!("is not a rotation (|R·Rᵀ − I| = {orthonormality:.2e}, det = {:.3})", rotation.determinant()),
+                format!(
+                    "is not a rotation (|R·Rᵀ − I| = {orthonormality:.2e}, det = {:.3})",
+                    rotation.determinant()
+                ),
             ));
         }
         let translation = Vec3::from_array(e.translation);
         if !translation.is_finite() {
             return Err(field("extrinsics.translation", "is not finite".into()));
         }
-        let camera = Camera { intrinsics: k, rotation, translation };
+        let camera = Camera {
+            intrinsics: k,
+            rotation,
+            translation,
+        };
         let position = Vec3::from_array(e.position);
         if !(camera.position().distance(position) < 0.1) {
             return Err(field(
@@ -225,9 +265,17 @@ mod tests {
         // a point 300 cm ahead and 150 cm to the right lands 160 px right of centre.
         let c = camera();
         let right = c.project(Vec3::new(-150.0, 100.0, 0.0)).expect("in front");
-        assert!((right.pixel - Vec2::new(480.0, 240.0)).length() < 1e-3, "{:?}", right.pixel);
+        assert!(
+            (right.pixel - Vec2::new(480.0, 240.0)).length() < 1e-3,
+            "{:?}",
+            right.pixel
+        );
         let up = c.project(Vec3::new(0.0, 250.0, 0.0)).expect("in front");
-        assert!((up.pixel - Vec2::new(320.0, 80.0)).length() < 1e-3, "{:?}", up.pixel);
+        assert!(
+            (up.pixel - Vec2::new(320.0, 80.0)).length() < 1e-3,
+            "{:?}",
+            up.pixel
+        );
         assert!(c.project(Vec3::new(0.0, 100.0, -400.0)).is_none());
     }
 
@@ -246,8 +294,13 @@ mod tests {
         let back = Camera::parse(&text, Path::new("camera.toml")).expect("parses");
         assert!((back.translation - c.translation).length() < 1e-4);
         let bad = text.replace("fx = ", "fx = -");
-        let err = Camera::parse(&bad, Path::new("cam.toml")).unwrap_err().to_string();
-        assert!(err.contains("cam.toml") && err.contains("intrinsics.fx"), "{err}");
+        let err = Camera::parse(&bad, Path::new("cam.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("cam.toml") && err.contains("intrinsics.fx"),
+            "{err}"
+        );
         let bad = text.replace("position = [", "position = [5000.0, ");
         assert!(Camera::parse(&bad, Path::new("cam.toml")).is_err());
     }

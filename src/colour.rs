@@ -46,7 +46,11 @@ impl Hsv {
             60.0 * ((r - g) / delta + 4.0)
         };
         let saturation = if max > 0.0 { delta / max } else { 0.0 };
-        Hsv { hue, saturation, value: max }
+        Hsv {
+            hue,
+            saturation,
+            value: max,
+        }
     }
 }
 
@@ -74,9 +78,16 @@ mod tests {
     #[test]
     fn round_trip_over_the_hue_circle() {
         for step in 0..72 {
-            let hsv = Hsv { hue: step as f32 * 5.0, saturation: 0.7, value: 0.8 };
+            let hsv = Hsv {
+                hue: step as f32 * 5.0,
+                saturation: 0.7,
+                value: 0.8,
+            };
             let back = Hsv::from_rgb(hsv.to_rgb());
-            assert!(hue_distance(back.hue, hsv.hue) < 1e-3, "{hsv:?} -> {back:?}");
+            assert!(
+                hue_distance(back.hue, hsv.hue) < 1e-3,
+                "{hsv:?} -> {back:?}"
+            );
             assert!((back.saturation - 0.7).abs() < 1e-5 && (back.value - 0.8).abs() < 1e-5);
         }
     }

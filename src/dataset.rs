@@ -123,8 +123,13 @@ pub const MARKERS_HEADER: &str = "frame,marker_id,colour,x,y,visible_fraction";
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
     #[error("{path}: cannot read: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
-    #[error("{path}: missing; the dataset is incomplete (the generator writes manifest.toml last)")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error(
+        "{path}: missing; the dataset is incomplete (the generator writes manifest.toml last)"
+    )]
     Incomplete { path: PathBuf },
     #[error("{path}: {message}")]
     Manifest { path: PathBuf, message: String },
@@ -133,7 +138,11 @@ pub enum DatasetError {
     #[error(transparent)]
     Camera(#[from] CameraError),
     #[error("{path}: line {line}: {message}")]
-    Markers { path: PathBuf, line: usize, message: String },
+    Markers {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
     #[error("{path}: {message}")]
     Mismatch { path: PathBuf, message: String },
 }
@@ -157,13 +166,20 @@ impl Manifest {
     pub fn load(path: &Path) -> Result<Manifest, DatasetError> {
         let text = std::fs::read_to_string(path).map_err(|source| {
             if source.kind() == std::io::ErrorKind::NotFound {
-                DatasetError::Incomplete { path: path.to_owned() }
+                DatasetError::Incomplete {
+                    path: path.to_owned(),
+                }
             } else {
-                DatasetError::Io { path: path.to_owned(), source }
+                DatasetError::Io {
+                    path: path.to_owned(),
+                    source,
+                }
             }
         })?;
-        let manifest: Manifest = toml::from_str(&text)
-            .map_err(|e| DatasetError::Manifest { path: path.to_owned(), message: e.to_string() })?;
+        let manifest: Manifest = toml::from_str(&text).map_err(|e| DatasetError::Manifest {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
         if manifest.format != DATASET_FORMAT {
             return Err(DatasetError::Manifest {
                 path: path.to_owned(),
@@ -200,11 +216,20 @@ pub fn markers_to_csv(records: &[MarkerRecord]) -> String {
 
 /// Parses `markers.csv` text; errors name the line and the field.
 pub fn markers_from_csv(text: &str, path: &Path) -> Result<Vec<MarkerRecord>, DatasetError> {
-    let error = |line: usize, message: String| DatasetError::Markers { path: path.to_owned(), line, message };
+    let error = |line: usize, message: String| DatasetError::Markers {
+        path: path.to_owned(),
+        line,
+        message,
+    };
     let mut lines = text.lines().enumerate();
     match lines.next() {
         Some((_, header)) if header.trim() == MARKERS_HEADER => {}
-        Some((_, header)) => return Err(error(1, format!("header is '{header}', expected '{MARKERS_HEADER}'"))),
+        Some((_, header)) => {
+            return Err(error(
+                1,
+                format!("header is '{header}', expected '{MARKERS_HEADER}'"),
+            ))
+        }
         None => return Err(error(1, "empty file".into())),
     }
     let mut records = Vec::new();
@@ -217,7 +242,10 @@ pub fn markers_from_csv(text: &str, path: &Path) -> Result<Vec<MarkerRecord>, Da
             return Err(error(i + 1, format!("{} fields, expected 6", fields.len())));
         }
         fn field<T: std::str::FromStr>(value: &str, name: &str) -> Result<T, String> {
-            value.trim().parse().map_err(|_| format!("field {name}: '{value}' is not a valid number"))
+            value
+                .trim()
+                .parse()
+                .map_err(|_| format!("field {name}: '{value}' is not a valid number"))
         }
         let parsed = (|| -> Result<MarkerRecord, String> {
             let record = MarkerRecord {
@@ -232,7 +260,10 @@ pub fn markers_from_csv(text: &str, path: &Path) -> Result<Vec<MarkerRecord>, Da
                 return Err("field x/y: not finite".into());
             }
             if !(0.0..=1.0).contains(&record.visible_fraction) {
-                return Err(format!("field visible_fraction: {} is not in [0, 1]", record.visible_fraction));
+                return Err(format!(
+                    "field visible_fraction: {} is not in [0, 1]",
+                    record.visible_fraction
+                ));
             }
             Ok(record)
         })();
@@ -260,15 +291,23 @@ impl Dataset {
         if motion.frame_count() != manifest.frames {
             return Err(mismatch(
                 root.join("motion.bvh"),
-                format!("{} frames, the manifest says {}", motion.frame_count(), manifest.frames),
+                format!(
+                    "{} frames, the manifest says {}",
+                    motion.frame_count(),
+                    manifest.frames
+                ),
             ));
         }
-        if (camera.intrinsics.width, camera.intrinsics.height) != (manifest.width, manifest.height) {
+        if (camera.intrinsics.width, camera.intrinsics.height) != (manifest.width, manifest.height)
+        {
             return Err(mismatch(
                 root.join("camera.toml"),
                 format!(
                     "image size {}x{}, the manifest says {}x{}",
-                    camera.intrinsics.width, camera.intrinsics.height, manifest.width, manifest.height
+                    camera.intrinsics.width,
+                    camera.intrinsics.height,
+                    manifest.width,
+                    manifest.height
                 ),
             ));
         }
@@ -278,7 +317,12 @@ impl Dataset {
                 return Err(mismatch(frame, "missing frame".into()));
             }
         }
-        Ok(Dataset { root: root.to_owned(), manifest, camera, motion })
+        Ok(Dataset {
+            root: root.to_owned(),
+            manifest,
+            camera,
+            motion,
+        })
     }
 
     pub fn frame_count(&self) -> usize {
@@ -296,7 +340,10 @@ impl Dataset {
     /// Reads `markers.csv`.
     pub fn markers(&self) -> Result<Vec<MarkerRecord>, DatasetError> {
         let path = self.root.join("markers.csv");
-        let text = std::fs::read_to_string(&path).map_err(|source| DatasetError::Io { path: path.clone(), source })?;
+        let text = std::fs::read_to_string(&path).map_err(|source| DatasetError::Io {
+            path: path.clone(),
+            source,
+        })?;
         markers_from_csv(&text, &path)
     }
 }
@@ -308,20 +355,44 @@ mod tests {
     #[test]
     fn markers_csv_round_trip() {
         let records = vec![
-            MarkerRecord { frame: 0, marker_id: 20_102, colour: "cyan".into(), x: 12.5, y: 7.25, visible_fraction: 1.0 },
-            MarkerRecord { frame: 3, marker_id: 5, colour: "red".into(), x: 0.0, y: 479.5, visible_fraction: 0.375 },
+            MarkerRecord {
+                frame: 0,
+                marker_id: 20_102,
+                colour: "cyan".into(),
+                x: 12.5,
+                y: 7.25,
+                visible_fraction: 1.0,
+            },
+            MarkerRecord {
+                frame: 3,
+                marker_id: 5,
+                colour: "red".into(),
+                x: 0.0,
+                y: 479.5,
+                visible_fraction: 0.375,
+            },
         ];
         let text = markers_to_csv(&records);
         assert!(text.starts_with(MARKERS_HEADER));
-        assert_eq!(markers_from_csv(&text, Path::new("m.csv")).expect("parses"), records);
+        assert_eq!(
+            markers_from_csv(&text, Path::new("m.csv")).expect("parses"),
+            records
+        );
     }
 
     #[test]
     fn bad_markers_csv_names_line_and_field() {
         let text = format!("{MARKERS_HEADER}\n0,1,red,1,2,0.5\n1,2,cyan,abc,2,0.5\n");
-        let err = markers_from_csv(&text, Path::new("m.csv")).unwrap_err().to_string();
-        assert!(err.contains("m.csv") && err.contains("line 3") && err.contains("field x"), "{err}");
-        let err = markers_from_csv("a,b\n", Path::new("m.csv")).unwrap_err().to_string();
+        let err = markers_from_csv(&text, Path::new("m.csv"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("m.csv") && err.contains("line 3") && err.contains("field x"),
+            "{err}"
+        );
+        let err = markers_from_csv("a,b\n", Path::new("m.csv"))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("header"), "{err}");
         let text = format!("{MARKERS_HEADER}\n0,1,red,1,2,1.5\n");
         assert!(markers_from_csv(&text, Path::new("m.csv")).is_err());

@@ -14,7 +14,11 @@ use clap::{Parser, Subcommand};
 use suitcap::source::{open_source, SourceOptions};
 
 #[derive(Parser)]
-#[command(name = "suitcap", version, about = "Monocular motion capture and virtual try-on from a marker suit")]
+#[command(
+    name = "suitcap",
+    version,
+    about = "Monocular motion capture and virtual try-on from a marker suit"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -50,8 +54,13 @@ enum Command {
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let (w, h) = text.split_once('x').ok_or_else(|| format!("'{text}' is not WIDTHxHEIGHT"))?;
-    let parse = |v: &str| v.parse::<u32>().map_err(|_| format!("'{text}' is not WIDTHxHEIGHT"));
+    let (w, h) = text
+        .split_once('x')
+        .ok_or_else(|| format!("'{text}' is not WIDTHxHEIGHT"))?;
+    let parse = |v: &str| {
+        v.parse::<u32>()
+            .map_err(|_| format!("'{text}' is not WIDTHxHEIGHT"))
+    };
     let (w, h) = (parse(w)?, parse(h)?);
     if w == 0 || h == 0 {
         return Err(format!("'{text}': width and height must be positive"));
@@ -59,8 +68,18 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-fn capture(input: &str, out: &PathBuf, frames: Option<u64>, size: Option<(u32, u32)>, fps: Option<f64>) -> anyhow::Result<()> {
-    let options = SourceOptions { size, fps, ..SourceOptions::default() };
+fn capture(
+    input: &str,
+    out: &PathBuf,
+    frames: Option<u64>,
+    size: Option<(u32, u32)>,
+    fps: Option<f64>,
+) -> anyhow::Result<()> {
+    let options = SourceOptions {
+        size,
+        fps,
+        ..SourceOptions::default()
+    };
     let mut source = open_source(input, &options)?;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     eprintln!("capturing from {}", source.describe());
@@ -73,11 +92,17 @@ fn capture(input: &str, out: &PathBuf, frames: Option<u64>, size: Option<(u32, u
         match source.next_frame() {
             Ok(Some(frame)) => {
                 let path = out.join(format!("{written:06}.png"));
-                frame.image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+                frame
+                    .image
+                    .save(&path)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
                 written += 1;
             }
             Ok(None) => break,
-            Err(e @ (suitcap::source::SourceError::CorruptFrame { .. } | suitcap::source::SourceError::SizeMismatch { .. })) => {
+            Err(
+                e @ (suitcap::source::SourceError::CorruptFrame { .. }
+                | suitcap::source::SourceError::SizeMismatch { .. }),
+            ) => {
                 eprintln!("skipped: {e}");
                 skipped.push(e.to_string());
             }
@@ -91,7 +116,11 @@ fn capture(input: &str, out: &PathBuf, frames: Option<u64>, size: Option<(u32, u
         }
     }
     let seconds = started.elapsed().as_secs_f64();
-    println!("{written} frames written to {} in {seconds:.1} s; {} corrupt frames skipped", out.display(), skipped.len());
+    println!(
+        "{written} frames written to {} in {seconds:.1} s; {} corrupt frames skipped",
+        out.display(),
+        skipped.len()
+    );
     for s in &skipped {
         println!("  skipped: {s}");
     }
@@ -113,7 +142,12 @@ fn check(suit: &PathBuf, data: Option<&PathBuf>) -> anyhow::Result<()> {
         definition
             .skeleton
             .bind(&dataset.motion.skeleton)
-            .with_context(|| format!("{}: motion.bvh does not carry the suit's joints", data.display()))?;
+            .with_context(|| {
+                format!(
+                    "{}: motion.bvh does not carry the suit's joints",
+                    data.display()
+                )
+            })?;
         if dataset.manifest.suit.layout_seed != definition.layout_seed {
             bail!(
                 "{}: rendered with suit layout seed {}, but {} has {}",
@@ -140,7 +174,13 @@ fn check(suit: &PathBuf, data: Option<&PathBuf>) -> anyhow::Result<()> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
-        Command::Capture { input, out, frames, size, fps } => capture(input, out, *frames, *size, *fps),
+        Command::Capture {
+            input,
+            out,
+            frames,
+            size,
+            fps,
+        } => capture(input, out, *frames, *size, *fps),
         Command::Check { suit, data } => check(suit, data.as_ref()),
     };
     match result {

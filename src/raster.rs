@@ -19,7 +19,11 @@ pub struct ScreenVertex {
 
 impl From<Projected> for ScreenVertex {
     fn from(p: Projected) -> Self {
-        ScreenVertex { x: p.pixel.x, y: p.pixel.y, depth: p.depth }
+        ScreenVertex {
+            x: p.pixel.x,
+            y: p.pixel.y,
+            depth: p.depth,
+        }
     }
 }
 
@@ -59,7 +63,11 @@ pub struct DepthBuffer {
 
 impl DepthBuffer {
     pub fn new(width: u32, height: u32) -> DepthBuffer {
-        DepthBuffer { width, height, depth: vec![f32::INFINITY; width as usize * height as usize] }
+        DepthBuffer {
+            width,
+            height,
+            depth: vec![f32::INFINITY; width as usize * height as usize],
+        }
     }
 
     pub fn width(&self) -> u32 {
@@ -75,7 +83,8 @@ impl DepthBuffer {
         self.width = width;
         self.height = height;
         self.depth.clear();
-        self.depth.resize(width as usize * height as usize, f32::INFINITY);
+        self.depth
+            .resize(width as usize * height as usize, f32::INFINITY);
     }
 
     pub fn get(&self, x: u32, y: u32) -> f32 {
@@ -108,7 +117,10 @@ pub fn draw_triangle(
     mut shade: impl FnMut(Fragment),
 ) {
     let [a, b, c] = vertices;
-    if [a, b, c].iter().any(|v| !(v.depth >= near) || !v.x.is_finite() || !v.y.is_finite()) {
+    if [a, b, c]
+        .iter()
+        .any(|v| !(v.depth >= near) || !v.x.is_finite() || !v.y.is_finite())
+    {
         return;
     }
     let area = edge(a.x, a.y, b.x, b.y, c.x, c.y);
@@ -120,14 +132,38 @@ pub fn draw_triangle(
         return;
     }
     // Order the vertices so the signed area is positive; `order` maps back to the caller's vertices.
-    let (v, order) = if area > 0.0 { ([a, b, c], [0, 1, 2]) } else { ([a, c, b], [0, 2, 1]) };
+    let (v, order) = if area > 0.0 {
+        ([a, b, c], [0, 1, 2])
+    } else {
+        ([a, c, b], [0, 2, 1])
+    };
     let area = area.abs();
 
     let (w, h) = (buffer.width as f32, buffer.height as f32);
-    let min_x = v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min).floor().max(0.0);
-    let max_x = v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max).ceil().min(w);
-    let min_y = v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min).floor().max(0.0);
-    let max_y = v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max).ceil().min(h);
+    let min_x = v
+        .iter()
+        .map(|p| p.x)
+        .fold(f32::INFINITY, f32::min)
+        .floor()
+        .max(0.0);
+    let max_x = v
+        .iter()
+        .map(|p| p.x)
+        .fold(f32::NEG_INFINITY, f32::max)
+        .ceil()
+        .min(w);
+    let min_y = v
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min)
+        .floor()
+        .max(0.0);
+    let max_y = v
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::NEG_INFINITY, f32::max)
+        .ceil()
+        .min(h);
     if min_x >= max_x || min_y >= max_y {
         return;
     }
@@ -153,7 +189,8 @@ pub fn draw_triangle(
             if !inside {
                 continue;
             }
-            let inv_z = lambda[0] * inv_depth[0] + lambda[1] * inv_depth[1] + lambda[2] * inv_depth[2];
+            let inv_z =
+                lambda[0] * inv_depth[0] + lambda[1] * inv_depth[1] + lambda[2] * inv_depth[2];
             let depth = 1.0 / inv_z;
             let index = py as usize * width + px as usize;
             if depth >= buffer.depth[index] {
@@ -164,7 +201,14 @@ pub fn draw_triangle(
             for k in 0..3 {
                 weights[order[k]] = lambda[k] * inv_depth[k] * depth;
             }
-            shade(Fragment { x: px, y: py, index, depth, weights, front_facing });
+            shade(Fragment {
+                x: px,
+                y: py,
+                index,
+                depth,
+                weights,
+                front_facing,
+            });
         }
     }
 }
@@ -194,9 +238,17 @@ mod tests {
         // Triangle (0,0) (4,0) (0,4): centres (x+.5, y+.5) with x + y + 1 < 4 lie inside;
         // centres exactly on the hypotenuse (x + y + 1 = 4) are on a right edge and are not drawn.
         let mut buffer = DepthBuffer::new(4, 4);
-        draw_triangle(&mut buffer, [sv(0.0, 0.0, 1.0), sv(4.0, 0.0, 1.0), sv(0.0, 4.0, 1.0)], Cull::None, 0.1, |_| {});
-        let expected: Vec<(u32, u32)> =
-            (0..4).flat_map(|y| (0..4).map(move |x| (x, y))).filter(|(x, y)| x + y + 1 < 4).collect();
+        draw_triangle(
+            &mut buffer,
+            [sv(0.0, 0.0, 1.0), sv(4.0, 0.0, 1.0), sv(0.0, 4.0, 1.0)],
+            Cull::None,
+            0.1,
+            |_| {},
+        );
+        let expected: Vec<(u32, u32)> = (0..4)
+            .flat_map(|y| (0..4).map(move |x| (x, y)))
+            .filter(|(x, y)| x + y + 1 < 4)
+            .collect();
         assert_eq!(covered(&buffer), expected);
     }
 
@@ -205,10 +257,19 @@ mod tests {
         // A 4×4 square split along its diagonal: every pixel drawn exactly once.
         let mut buffer = DepthBuffer::new(4, 4);
         let mut count = vec![0; 16];
-        let (p0, p1, p2, p3) = (sv(0.0, 0.0, 1.0), sv(4.0, 0.0, 1.0), sv(4.0, 4.0, 1.0), sv(0.0, 4.0, 1.0));
-        draw_triangle(&mut buffer, [p0, p1, p2], Cull::None, 0.1, |f| count[f.index] += 1);
+        let (p0, p1, p2, p3) = (
+            sv(0.0, 0.0, 1.0),
+            sv(4.0, 0.0, 1.0),
+            sv(4.0, 4.0, 1.0),
+            sv(0.0, 4.0, 1.0),
+        );
+        draw_triangle(&mut buffer, [p0, p1, p2], Cull::None, 0.1, |f| {
+            count[f.index] += 1
+        });
         buffer.clear(4, 4);
-        draw_triangle(&mut buffer, [p0, p2, p3], Cull::None, 0.1, |f| count[f.index] += 1);
+        draw_triangle(&mut buffer, [p0, p2, p3], Cull::None, 0.1, |f| {
+            count[f.index] += 1
+        });
         assert_eq!(count, vec![1; 16]);
     }
 
@@ -218,9 +279,15 @@ mod tests {
             let mut buffer = DepthBuffer::new(4, 4);
             let mut colour = vec![0u8; 16];
             let big = |d: f32| [sv(-1.0, -1.0, d), sv(9.0, -1.0, d), sv(-1.0, 9.0, d)];
-            let order = if near_first { [(1, 2.0), (2, 5.0)] } else { [(2, 5.0), (1, 2.0)] };
+            let order = if near_first {
+                [(1, 2.0), (2, 5.0)]
+            } else {
+                [(2, 5.0), (1, 2.0)]
+            };
             for (id, depth) in order {
-                draw_triangle(&mut buffer, big(depth), Cull::None, 0.1, |f| colour[f.index] = id);
+                draw_triangle(&mut buffer, big(depth), Cull::None, 0.1, |f| {
+                    colour[f.index] = id
+                });
             }
             assert!(colour.iter().all(|&c| c == 1));
             assert_eq!(buffer.get(0, 0), 2.0);
@@ -271,9 +338,31 @@ mod tests {
     fn triangles_behind_the_near_plane_or_off_screen_draw_nothing() {
         let mut buffer = DepthBuffer::new(4, 4);
         let mut drawn = 0;
-        draw_triangle(&mut buffer, [sv(0.0, 0.0, 0.01), sv(4.0, 0.0, 1.0), sv(0.0, 4.0, 1.0)], Cull::None, 0.1, |_| drawn += 1);
-        draw_triangle(&mut buffer, [sv(10.0, 10.0, 1.0), sv(14.0, 10.0, 1.0), sv(10.0, 14.0, 1.0)], Cull::None, 0.1, |_| drawn += 1);
-        draw_triangle(&mut buffer, [sv(f32::NAN, 0.0, 1.0), sv(4.0, 0.0, 1.0), sv(0.0, 4.0, 1.0)], Cull::None, 0.1, |_| drawn += 1);
+        draw_triangle(
+            &mut buffer,
+            [sv(0.0, 0.0, 0.01), sv(4.0, 0.0, 1.0), sv(0.0, 4.0, 1.0)],
+            Cull::None,
+            0.1,
+            |_| drawn += 1,
+        );
+        draw_triangle(
+            &mut buffer,
+            [
+                sv(10.0, 10.0, 1.0),
+                sv(14.0, 10.0, 1.0),
+                sv(10.0, 14.0, 1.0),
+            ],
+            Cull::None,
+            0.1,
+            |_| drawn += 1,
+        );
+        draw_triangle(
+            &mut buffer,
+            [sv(f32::NAN, 0.0, 1.0), sv(4.0, 0.0, 1.0), sv(0.0, 4.0, 1.0)],
+            Cull::None,
+            0.1,
+            |_| drawn += 1,
+        );
         assert_eq!(drawn, 0);
     }
 }

@@ -50,7 +50,10 @@ impl Channel {
     }
 
     pub fn is_rotation(self) -> bool {
-        matches!(self, Channel::Xrotation | Channel::Yrotation | Channel::Zrotation)
+        matches!(
+            self,
+            Channel::Xrotation | Channel::Yrotation | Channel::Zrotation
+        )
     }
 
     /// Unit axis of the channel (x, y or z).
@@ -90,14 +93,25 @@ pub struct Skeleton {
 pub enum SkeletonError {
     #[error("the skeleton has no joints")]
     Empty,
-    #[error("joint {index} ('{name}'): the first joint must be the root and only it may lack a parent")]
+    #[error(
+        "joint {index} ('{name}'): the first joint must be the root and only it may lack a parent"
+    )]
     BadRoot { index: usize, name: String },
     #[error("joint {index} ('{name}'): parent {parent} does not come before it")]
-    ParentOrder { index: usize, name: String, parent: usize },
+    ParentOrder {
+        index: usize,
+        name: String,
+        parent: usize,
+    },
     #[error("joint name '{0}' appears twice")]
     DuplicateName(String),
     #[error("joint {index} ('{name}'): first channel is {got}, expected {expected}")]
-    ChannelLayout { index: usize, name: String, got: usize, expected: usize },
+    ChannelLayout {
+        index: usize,
+        name: String,
+        got: usize,
+        expected: usize,
+    },
 }
 
 impl Skeleton {
@@ -110,13 +124,23 @@ impl Skeleton {
         for (index, joint) in joints.iter().enumerate() {
             match joint.parent {
                 None if index != 0 => {
-                    return Err(SkeletonError::BadRoot { index, name: joint.name.clone() })
+                    return Err(SkeletonError::BadRoot {
+                        index,
+                        name: joint.name.clone(),
+                    })
                 }
                 Some(_) if index == 0 => {
-                    return Err(SkeletonError::BadRoot { index, name: joint.name.clone() })
+                    return Err(SkeletonError::BadRoot {
+                        index,
+                        name: joint.name.clone(),
+                    })
                 }
                 Some(parent) if parent >= index => {
-                    return Err(SkeletonError::ParentOrder { index, name: joint.name.clone(), parent })
+                    return Err(SkeletonError::ParentOrder {
+                        index,
+                        name: joint.name.clone(),
+                        parent,
+                    })
                 }
                 _ => {}
             }
@@ -133,7 +157,10 @@ impl Skeleton {
             }
             expected_channel += joint.channels.len();
         }
-        Ok(Skeleton { joints, channel_count: expected_channel })
+        Ok(Skeleton {
+            joints,
+            channel_count: expected_channel,
+        })
     }
 
     pub fn joints(&self) -> &[Joint] {
@@ -186,7 +213,10 @@ impl Skeleton {
                 ..j.clone()
             })
             .collect();
-        Skeleton { joints, channel_count: self.channel_count }
+        Skeleton {
+            joints,
+            channel_count: self.channel_count,
+        }
     }
 
     /// Local transform of joint `index` for one frame of channel values.
@@ -202,7 +232,10 @@ impl Skeleton {
                 translation += channel.axis() * value;
             }
         }
-        Affine3A { matrix3: rotation, translation }
+        Affine3A {
+            matrix3: rotation,
+            translation,
+        }
     }
 
     /// World transform of every joint for one frame, written into `world` (resized to the joint count).
@@ -291,7 +324,10 @@ pub(crate) mod tests {
         let mut world = Vec::new();
         arm.forward_kinematics(&frame, &mut world);
         let end = world[1].transform_point3(Vec3::new(5.0, 0.0, 0.0));
-        assert!(close(Vec3::from(world[1].translation), Vec3::new(10.0, 0.0, 0.0)));
+        assert!(close(
+            Vec3::from(world[1].translation),
+            Vec3::new(10.0, 0.0, 0.0)
+        ));
         assert!(close(end, Vec3::new(10.0, 5.0, 0.0)));
     }
 
@@ -302,17 +338,27 @@ pub(crate) mod tests {
         let arm = two_joint_arm();
         let frame = [0.0, 0.0, 0.0, 90.0, 90.0, 0.0, 0.0, 0.0, 0.0];
         let positions = arm.joint_positions(&frame);
-        assert!(close(positions[1], Vec3::new(0.0, 0.0, -10.0)), "{:?}", positions[1]);
+        assert!(
+            close(positions[1], Vec3::new(0.0, 0.0, -10.0)),
+            "{:?}",
+            positions[1]
+        );
     }
 
     #[test]
     fn invalid_hierarchies_are_rejected() {
         let mut joints = two_joint_arm().joints().to_vec();
         joints[1].name = "shoulder".into();
-        assert_eq!(Skeleton::new(joints).unwrap_err(), SkeletonError::DuplicateName("shoulder".into()));
+        assert_eq!(
+            Skeleton::new(joints).unwrap_err(),
+            SkeletonError::DuplicateName("shoulder".into())
+        );
         let mut joints = two_joint_arm().joints().to_vec();
         joints[1].first_channel = 3;
-        assert!(matches!(Skeleton::new(joints), Err(SkeletonError::ChannelLayout { .. })));
+        assert!(matches!(
+            Skeleton::new(joints),
+            Err(SkeletonError::ChannelLayout { .. })
+        ));
         assert_eq!(Skeleton::new(vec![]).unwrap_err(), SkeletonError::Empty);
     }
 }

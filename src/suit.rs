@@ -71,20 +71,36 @@ pub struct SuitDefinition {
 #[derive(Debug, thiserror::Error)]
 pub enum SuitError {
     #[error("{path}: cannot read: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: {message}")]
     Format { path: PathBuf, message: String },
     #[error("{path}: field {field}: {message}")]
-    Field { path: PathBuf, field: String, message: String },
+    Field {
+        path: PathBuf,
+        field: String,
+        message: String,
+    },
 }
 
 /// A mocap skeleton that does not carry the suit's joints.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum BindError {
     #[error("suit joint '{joint}' maps to BVH joint '{bvh}', which the motion does not have (it has: {available})")]
-    UnknownJoint { joint: String, bvh: String, available: String },
+    UnknownJoint {
+        joint: String,
+        bvh: String,
+        available: String,
+    },
     #[error("suit joint '{joint}' has parent '{parent}', but BVH joint '{parent_bvh}' is not an ancestor of '{bvh}'")]
-    NotAnAncestor { joint: String, parent: String, parent_bvh: String, bvh: String },
+    NotAnAncestor {
+        joint: String,
+        parent: String,
+        parent_bvh: String,
+        bvh: String,
+    },
 }
 
 #[derive(Deserialize)]
@@ -138,21 +154,32 @@ impl SuitDefinition {
 
     /// Reads and validates a suit file.
     pub fn load(path: &Path) -> Result<SuitDefinition, SuitError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| SuitError::Io { path: path.to_owned(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| SuitError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
         SuitDefinition::parse(&text, path)
     }
 
     /// Parses and validates suit text; `path` names the source in errors.
     pub fn parse(text: &str, path: &Path) -> Result<SuitDefinition, SuitError> {
-        let file: SuitFile = toml::from_str(text)
-            .map_err(|e| SuitError::Format { path: path.to_owned(), message: e.to_string() })?;
-        let field = |field: String, message: String| SuitError::Field { path: path.to_owned(), field, message };
+        let file: SuitFile = toml::from_str(text).map_err(|e| SuitError::Format {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        let field = |field: String, message: String| SuitError::Field {
+            path: path.to_owned(),
+            field,
+            message,
+        };
 
         if file.format != SUIT_FORMAT {
             return Err(field(
                 "format".into(),
-                format!("{} is not the suit format this build reads ({SUIT_FORMAT})", file.format),
+                format!(
+                    "{} is not the suit format this build reads ({SUIT_FORMAT})",
+                    file.format
+                ),
             ));
         }
         if file.name.trim().is_empty() {
@@ -160,23 +187,45 @@ impl SuitDefinition {
         }
         let p = &file.pattern;
         if !(p.marker_size_cm > 0.5 && p.marker_size_cm < 50.0) {
-            return Err(field("pattern.marker_size_cm".into(), format!("{} is not in (0.5, 50)", p.marker_size_cm)));
+            return Err(field(
+                "pattern.marker_size_cm".into(),
+                format!("{} is not in (0.5, 50)", p.marker_size_cm),
+            ));
         }
         if !(p.marker_gap_cm >= 0.5 && p.marker_gap_cm < 50.0) {
-            return Err(field("pattern.marker_gap_cm".into(), format!("{} is not in [0.5, 50)", p.marker_gap_cm)));
+            return Err(field(
+                "pattern.marker_gap_cm".into(),
+                format!("{} is not in [0.5, 50)", p.marker_gap_cm),
+            ));
         }
 
         let colour = |c: &ColourFile, at: String| -> Result<SuitColour, SuitError> {
             if !(0.0..360.0).contains(&c.hue) {
-                return Err(field(format!("{at}.hue"), format!("{} is not in [0, 360)", c.hue)));
+                return Err(field(
+                    format!("{at}.hue"),
+                    format!("{} is not in [0, 360)", c.hue),
+                ));
             }
             if !(0.0..=1.0).contains(&c.saturation) {
-                return Err(field(format!("{at}.saturation"), format!("{} is not in [0, 1]", c.saturation)));
+                return Err(field(
+                    format!("{at}.saturation"),
+                    format!("{} is not in [0, 1]", c.saturation),
+                ));
             }
             if !(0.0..=1.0).contains(&c.value) {
-                return Err(field(format!("{at}.value"), format!("{} is not in [0, 1]", c.value)));
+                return Err(field(
+                    format!("{at}.value"),
+                    format!("{} is not in [0, 1]", c.value),
+                ));
             }
-            Ok(SuitColour { name: c.name.clone(), hsv: Hsv { hue: c.hue, saturation: c.saturation, value: c.value } })
+            Ok(SuitColour {
+                name: c.name.clone(),
+                hsv: Hsv {
+                    hue: c.hue,
+                    saturation: c.saturation,
+                    value: c.value,
+                },
+            })
         };
         let background = colour(&file.colours.background, "colours.background".into())?;
         let markers = file
@@ -187,23 +236,41 @@ impl SuitDefinition {
             .map(|(i, c)| colour(c, format!("colours.markers[{i}]")))
             .collect::<Result<Vec<_>, _>>()?;
         if markers.is_empty() {
-            return Err(field("colours.markers".into(), "lists no marker colour".into()));
+            return Err(field(
+                "colours.markers".into(),
+                "lists no marker colour".into(),
+            ));
         }
 
         let d = file.detection;
         if !(d.hue_tolerance_deg > 0.0 && d.hue_tolerance_deg < 90.0) {
-            return Err(field("detection.hue_tolerance_deg".into(), format!("{} is not in (0, 90)", d.hue_tolerance_deg)));
+            return Err(field(
+                "detection.hue_tolerance_deg".into(),
+                format!("{} is not in (0, 90)", d.hue_tolerance_deg),
+            ));
         }
         if !(0.0..1.0).contains(&d.min_saturation) {
-            return Err(field("detection.min_saturation".into(), format!("{} is not in [0, 1)", d.min_saturation)));
+            return Err(field(
+                "detection.min_saturation".into(),
+                format!("{} is not in [0, 1)", d.min_saturation),
+            ));
         }
         if !(0.0..1.0).contains(&d.min_value) {
-            return Err(field("detection.min_value".into(), format!("{} is not in [0, 1)", d.min_value)));
+            return Err(field(
+                "detection.min_value".into(),
+                format!("{} is not in [0, 1)", d.min_value),
+            ));
         }
         // Every pair of suit colours must be told apart by the hue gate.
-        let all: Vec<(String, &SuitColour)> = std::iter::once(("colours.background".to_string(), &background))
-            .chain(markers.iter().enumerate().map(|(i, m)| (format!("colours.markers[{i}]"), m)))
-            .collect();
+        let all: Vec<(String, &SuitColour)> =
+            std::iter::once(("colours.background".to_string(), &background))
+                .chain(
+                    markers
+                        .iter()
+                        .enumerate()
+                        .map(|(i, m)| (format!("colours.markers[{i}]"), m)),
+                )
+                .collect();
         for (i, (name_a, a)) in all.iter().enumerate() {
             for (name_b, b) in &all[i + 1..] {
                 let distance = hue_distance(a.hsv.hue, b.hsv.hue);
@@ -224,24 +291,45 @@ impl SuitDefinition {
         for (i, j) in file.skeleton.iter().enumerate() {
             let at = format!("skeleton[{i}]");
             if joints.iter().any(|k| k.name == j.name) {
-                return Err(field(format!("{at}.name"), format!("'{}' appears twice", j.name)));
+                return Err(field(
+                    format!("{at}.name"),
+                    format!("'{}' appears twice", j.name),
+                ));
             }
             if joints.iter().any(|k| k.bvh == j.bvh) {
-                return Err(field(format!("{at}.bvh"), format!("'{}' is mapped twice", j.bvh)));
+                return Err(field(
+                    format!("{at}.bvh"),
+                    format!("'{}' is mapped twice", j.bvh),
+                ));
             }
             let parent = match (&j.parent, i) {
                 (None, 0) => None,
                 (None, _) => {
-                    return Err(field(format!("{at}.parent"), "only the first joint (the root) may lack a parent".into()))
+                    return Err(field(
+                        format!("{at}.parent"),
+                        "only the first joint (the root) may lack a parent".into(),
+                    ))
                 }
                 (Some(p), 0) => {
-                    return Err(field(format!("{at}.parent"), format!("the first joint is the root; it cannot have parent '{p}'")))
+                    return Err(field(
+                        format!("{at}.parent"),
+                        format!("the first joint is the root; it cannot have parent '{p}'"),
+                    ))
                 }
-                (Some(p), _) => Some(joints.iter().position(|k| &k.name == p).ok_or_else(|| {
-                    field(format!("{at}.parent"), format!("'{p}' is not a joint listed before '{}'", j.name))
-                })?),
+                (Some(p), _) => {
+                    Some(joints.iter().position(|k| &k.name == p).ok_or_else(|| {
+                        field(
+                            format!("{at}.parent"),
+                            format!("'{p}' is not a joint listed before '{}'", j.name),
+                        )
+                    })?)
+                }
             };
-            joints.push(SuitJoint { name: j.name.clone(), parent, bvh: j.bvh.clone() });
+            joints.push(SuitJoint {
+                name: j.name.clone(),
+                parent,
+                bvh: j.bvh.clone(),
+            });
         }
         if joints.is_empty() {
             return Err(field("skeleton".into(), "lists no joint".into()));
@@ -284,11 +372,18 @@ impl SuitSkeleton {
     pub fn bind(&self, skeleton: &Skeleton) -> Result<Vec<usize>, BindError> {
         let mut indices = Vec::with_capacity(self.joints.len());
         for joint in &self.joints {
-            let index = skeleton.find(&joint.bvh).ok_or_else(|| BindError::UnknownJoint {
-                joint: joint.name.clone(),
-                bvh: joint.bvh.clone(),
-                available: skeleton.joints().iter().map(|j| j.name.as_str()).collect::<Vec<_>>().join(", "),
-            })?;
+            let index = skeleton
+                .find(&joint.bvh)
+                .ok_or_else(|| BindError::UnknownJoint {
+                    joint: joint.name.clone(),
+                    bvh: joint.bvh.clone(),
+                    available: skeleton
+                        .joints()
+                        .iter()
+                        .map(|j| j.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                })?;
             if let Some(parent) = joint.parent {
                 if !skeleton.is_ancestor(indices[parent], index) {
                     let p = &self.joints[parent];
@@ -356,15 +451,30 @@ mod tests {
     fn bad_fields_are_named() {
         let text = default_text();
         let cases = [
-            (text.replacen("hue = 180.0", "hue = 400.0", 1), "colours.markers[1].hue"),
-            (text.replacen("marker_size_cm = 4.0", "marker_size_cm = -4.0", 1), "pattern.marker_size_cm"),
-            (text.replacen("hue = 180.0", "hue = 95.0", 1), "colours.markers[1].hue"),
-            (text.replacen("parent = \"chest\"", "parent = \"nowhere\"", 1), ".parent"),
+            (
+                text.replacen("hue = 180.0", "hue = 400.0", 1),
+                "colours.markers[1].hue",
+            ),
+            (
+                text.replacen("marker_size_cm = 4.0", "marker_size_cm = -4.0", 1),
+                "pattern.marker_size_cm",
+            ),
+            (
+                text.replacen("hue = 180.0", "hue = 95.0", 1),
+                "colours.markers[1].hue",
+            ),
+            (
+                text.replacen("parent = \"chest\"", "parent = \"nowhere\"", 1),
+                ".parent",
+            ),
             (text.replacen("format = 1", "format = 7", 1), "format"),
         ];
         for (bad, field) in cases {
             let err = parse(&bad).expect_err(field).to_string();
-            assert!(err.contains(field) && err.contains("suit.toml"), "{field}: {err}");
+            assert!(
+                err.contains(field) && err.contains("suit.toml"),
+                "{field}: {err}"
+            );
         }
         assert!(parse("name = 3").is_err());
     }
@@ -376,14 +486,21 @@ mod tests {
         let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_09_01_run.bvh");
         let motion = crate::bvh::Motion::load(&clip).expect("clip");
         let err = suit.skeleton.bind(&motion.skeleton).unwrap_err();
-        assert!(matches!(&err, BindError::UnknownJoint { bvh, .. } if bvh == "rKnee"), "{err}");
+        assert!(
+            matches!(&err, BindError::UnknownJoint { bvh, .. } if bvh == "rKnee"),
+            "{err}"
+        );
     }
 
     #[test]
     fn layout_is_fixed_by_the_seed() {
         let suit = parse(&default_text()).expect("valid");
-        let colours: Vec<usize> = (0..300).map(|c| suit.marker_colour(3, c / 20 - 2, c as u32 % 20)).collect();
-        let again: Vec<usize> = (0..300).map(|c| suit.marker_colour(3, c / 20 - 2, c as u32 % 20)).collect();
+        let colours: Vec<usize> = (0..300)
+            .map(|c| suit.marker_colour(3, c / 20 - 2, c as u32 % 20))
+            .collect();
+        let again: Vec<usize> = (0..300)
+            .map(|c| suit.marker_colour(3, c / 20 - 2, c as u32 % 20))
+            .collect();
         assert_eq!(colours, again);
         // All three colours are used in roughly equal shares.
         for k in 0..3 {
@@ -392,7 +509,9 @@ mod tests {
         }
         let mut other = suit.clone();
         other.layout_seed += 1;
-        let different = (0..300).filter(|&c| other.marker_colour(3, 0, c) != suit.marker_colour(3, 0, c)).count();
+        let different = (0..300)
+            .filter(|&c| other.marker_colour(3, 0, c) != suit.marker_colour(3, 0, c))
+            .count();
         assert!(different > 100);
     }
 }

@@ -30,12 +30,35 @@ fn bench(c: &mut Criterion) {
     let (w, h) = (640, 480);
     let intrinsics = Intrinsics::from_fov(w, h, 58.0);
     let distance = intrinsics.fy * subject.height_cm / (0.6 * h as f32);
-    let camera = Camera::look_at(intrinsics, hip + Vec3::new(40.0, 30.0, distance), hip, Vec3::Y);
+    let camera = Camera::look_at(
+        intrinsics,
+        hip + Vec3::new(40.0, 30.0, distance),
+        hip,
+        Vec3::Y,
+    );
     let renderer = BodyRenderer::new(&suit, subject, &body, camera);
-    let lighting = Lighting { direction: Vec3::new(0.3, 1.0, 0.6).normalize(), ambient: 0.45, exposure: 1.0 };
-    let sensor = Sensor { gain: 1.0, blur_sigma: 0.7, read_noise: 2.0, shot_noise: 0.04 };
-    let plate = load_plate(&repo.join("tests/data/backgrounds/photos/opencv_home.jpg"), w, h, Crop { zoom: 1.0, pan_x: 0.5, pan_y: 0.5 })
-        .expect("plate");
+    let lighting = Lighting {
+        direction: Vec3::new(0.3, 1.0, 0.6).normalize(),
+        ambient: 0.45,
+        exposure: 1.0,
+    };
+    let sensor = Sensor {
+        gain: 1.0,
+        blur_sigma: 0.7,
+        read_noise: 2.0,
+        shot_noise: 0.04,
+    };
+    let plate = load_plate(
+        &repo.join("tests/data/backgrounds/photos/opencv_home.jpg"),
+        w,
+        h,
+        Crop {
+            zoom: 1.0,
+            pan_x: 0.5,
+            pan_y: 0.5,
+        },
+    )
+    .expect("plate");
     let plate: Vec<[f32; 3]> = plate.pixels().map(|p| p.0.map(f32::from)).collect();
     let mut layer = BodyLayer::new(w, h);
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
@@ -43,8 +66,12 @@ fn bench(c: &mut Criterion) {
 
     let mut group = c.benchmark_group("synth_640x480");
     group.sample_size(30);
-    group.bench_function("draw_body", |b| b.iter(|| renderer.draw(&world, &lighting, &mut layer)));
-    group.bench_function("visible_markers", |b| b.iter(|| renderer.visible_markers(&world, &layer)));
+    group.bench_function("draw_body", |b| {
+        b.iter(|| renderer.draw(&world, &lighting, &mut layer))
+    });
+    group.bench_function("visible_markers", |b| {
+        b.iter(|| renderer.visible_markers(&world, &layer))
+    });
     group.bench_function("compose_blur_noise", |b| {
         b.iter(|| {
             background.clear();
@@ -61,7 +88,14 @@ fn bench(c: &mut Criterion) {
                 image::codecs::png::CompressionType::Fast,
                 image::codecs::png::FilterType::Sub,
             );
-            image::ImageEncoder::write_image(encoder, image.as_raw(), w, h, image::ExtendedColorType::Rgb8).expect("encode");
+            image::ImageEncoder::write_image(
+                encoder,
+                image.as_raw(),
+                w,
+                h,
+                image::ExtendedColorType::Rgb8,
+            )
+            .expect("encode");
             bytes
         })
     });

@@ -27,7 +27,9 @@ impl BackgroundSource {
     pub fn describe(&self) -> String {
         match self {
             BackgroundSource::Photo(p) => p.display().to_string(),
-            BackgroundSource::Video { dir, frames } => format!("{} ({} video frames)", dir.display(), frames.len()),
+            BackgroundSource::Video { dir, frames } => {
+                format!("{} ({} video frames)", dir.display(), frames.len())
+            }
         }
     }
 }
@@ -35,16 +37,25 @@ impl BackgroundSource {
 #[derive(Debug, thiserror::Error)]
 pub enum BackgroundError {
     #[error("{path}: cannot read: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: cannot decode image: {source}")]
-    Decode { path: PathBuf, source: image::ImageError },
+    Decode {
+        path: PathBuf,
+        source: image::ImageError,
+    },
     #[error("no PNG or JPEG backgrounds found in {0}")]
     Empty(String),
 }
 
 fn is_image(path: &Path) -> bool {
     matches!(
-        path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref(),
+        path.extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref(),
         Some("png" | "jpg" | "jpeg")
     )
 }
@@ -55,12 +66,24 @@ fn numeric_stem(path: &Path) -> Option<u64> {
 
 /// Finds photographs and numbered video folders under `dirs` (recursively, three levels deep).
 pub fn discover(dirs: &[PathBuf]) -> Result<Vec<BackgroundSource>, BackgroundError> {
-    fn walk(dir: &Path, depth: usize, out: &mut Vec<BackgroundSource>) -> Result<(), BackgroundError> {
-        let read = std::fs::read_dir(dir).map_err(|source| BackgroundError::Io { path: dir.to_owned(), source })?;
+    fn walk(
+        dir: &Path,
+        depth: usize,
+        out: &mut Vec<BackgroundSource>,
+    ) -> Result<(), BackgroundError> {
+        let read = std::fs::read_dir(dir).map_err(|source| BackgroundError::Io {
+            path: dir.to_owned(),
+            source,
+        })?;
         let mut images = Vec::new();
         let mut subdirs = Vec::new();
         for entry in read {
-            let path = entry.map_err(|source| BackgroundError::Io { path: dir.to_owned(), source })?.path();
+            let path = entry
+                .map_err(|source| BackgroundError::Io {
+                    path: dir.to_owned(),
+                    source,
+                })?
+                .path();
             if path.is_dir() {
                 subdirs.push(path);
             } else if is_image(&path) {
@@ -71,7 +94,10 @@ pub fn discover(dirs: &[PathBuf]) -> Result<Vec<BackgroundSource>, BackgroundErr
         subdirs.sort();
         if images.len() >= 2 && images.iter().all(|p| numeric_stem(p).is_some()) {
             images.sort_by_key(|p| numeric_stem(p));
-            out.push(BackgroundSource::Video { dir: dir.to_owned(), frames: images });
+            out.push(BackgroundSource::Video {
+                dir: dir.to_owned(),
+                frames: images,
+            });
         } else {
             out.extend(images.into_iter().map(BackgroundSource::Photo));
         }
@@ -107,9 +133,17 @@ pub struct Crop {
 }
 
 /// Loads an image and returns the `crop` of it resampled to `width × height`.
-pub fn load_plate(path: &Path, width: u32, height: u32, crop: Crop) -> Result<RgbImage, BackgroundError> {
+pub fn load_plate(
+    path: &Path,
+    width: u32,
+    height: u32,
+    crop: Crop,
+) -> Result<RgbImage, BackgroundError> {
     let image = image::open(path)
-        .map_err(|source| BackgroundError::Decode { path: path.to_owned(), source })?
+        .map_err(|source| BackgroundError::Decode {
+            path: path.to_owned(),
+            source,
+        })?
         .to_rgb8();
     Ok(crop_resize(&image, width, height, crop))
 }
@@ -118,7 +152,11 @@ pub fn load_plate(path: &Path, width: u32, height: u32, crop: Crop) -> Result<Rg
 pub fn crop_resize(src: &RgbImage, width: u32, height: u32, crop: Crop) -> RgbImage {
     let (sw, sh) = (src.width() as f32, src.height() as f32);
     let aspect = width as f32 / height as f32;
-    let (mut cw, mut ch) = if sw / sh > aspect { (sh * aspect, sh) } else { (sw, sw / aspect) };
+    let (mut cw, mut ch) = if sw / sh > aspect {
+        (sh * aspect, sh)
+    } else {
+        (sw, sw / aspect)
+    };
     cw /= crop.zoom.max(1.0);
     ch /= crop.zoom.max(1.0);
     let x0 = (sw - cw) * crop.pan_x.clamp(0.0, 1.0);
@@ -173,14 +211,20 @@ pub struct Clutter {
 
 impl Clutter {
     /// A random object for a `width × height` image; `texture_from` optionally lends a photo patch.
-    pub fn random(rng: &mut impl Rng, width: u32, height: u32, texture_from: Option<&RgbImage>) -> Clutter {
+    pub fn random(
+        rng: &mut impl Rng,
+        width: u32,
+        height: u32,
+        texture_from: Option<&RgbImage>,
+    ) -> Clutter {
         let (w, h) = (width as f32, height as f32);
         let half_width = rng.gen_range(0.04..0.14) * w;
         let half_height = rng.gen_range(0.04..0.2) * h;
         let speed = rng.gen_range(0.03..0.3) * w;
         let angle: f32 = rng.gen_range(0.0..std::f32::consts::TAU);
         let moving = rng.gen_bool(0.75);
-        let flicker = (!moving || rng.gen_bool(0.3)).then(|| (rng.gen_range(0.4..2.5), rng.gen_range(0.0..6.3)));
+        let flicker = (!moving || rng.gen_bool(0.3))
+            .then(|| (rng.gen_range(0.4..2.5), rng.gen_range(0.0..6.3)));
         // Hues anywhere on the circle, the suit's own included: a segmenter must use more than colour.
         let hsv = suitcap::colour::Hsv {
             hue: rng.gen_range(0.0..360.0),
@@ -189,15 +233,32 @@ impl Clutter {
         };
         let colour = hsv.to_rgb().map(|c| c * 255.0);
         let texture = texture_from.filter(|_| rng.gen_bool(0.5)).map(|src| {
-            let crop = Crop { zoom: rng.gen_range(2.0..5.0), pan_x: rng.gen(), pan_y: rng.gen() };
-            crop_resize(src, (2.0 * half_width).ceil().max(1.0) as u32, (2.0 * half_height).ceil().max(1.0) as u32, crop)
+            let crop = Crop {
+                zoom: rng.gen_range(2.0..5.0),
+                pan_x: rng.gen(),
+                pan_y: rng.gen(),
+            };
+            crop_resize(
+                src,
+                (2.0 * half_width).ceil().max(1.0) as u32,
+                (2.0 * half_height).ceil().max(1.0) as u32,
+                crop,
+            )
         });
         Clutter {
-            shape: if rng.gen_bool(0.5) { Shape::Rectangle } else { Shape::Ellipse },
+            shape: if rng.gen_bool(0.5) {
+                Shape::Rectangle
+            } else {
+                Shape::Ellipse
+            },
             half_width,
             half_height,
             start: (rng.gen_range(0.0..w), rng.gen_range(0.0..h)),
-            velocity: if moving { (speed * angle.cos(), speed * angle.sin() * 0.4) } else { (0.0, 0.0) },
+            velocity: if moving {
+                (speed * angle.cos(), speed * angle.sin() * 0.4)
+            } else {
+                (0.0, 0.0)
+            },
             flicker,
             colour,
             texture,
@@ -214,8 +275,10 @@ impl Clutter {
         let (w, h) = (width as f32, height as f32);
         let span_x = w + 2.0 * self.half_width;
         let span_y = h + 2.0 * self.half_height;
-        let cx = (self.start.0 + self.velocity.0 * t + self.half_width).rem_euclid(span_x) - self.half_width;
-        let cy = (self.start.1 + self.velocity.1 * t + self.half_height).rem_euclid(span_y) - self.half_height;
+        let cx = (self.start.0 + self.velocity.0 * t + self.half_width).rem_euclid(span_x)
+            - self.half_width;
+        let cy = (self.start.1 + self.velocity.1 * t + self.half_height).rem_euclid(span_y)
+            - self.half_height;
         let x0 = (cx - self.half_width).floor().max(0.0) as u32;
         let x1 = ((cx + self.half_width).ceil().max(0.0) as u32).min(width);
         let y0 = (cy - self.half_height).floor().max(0.0) as u32;
@@ -233,8 +296,10 @@ impl Clutter {
                 }
                 let colour = match &self.texture {
                     Some(tex) => {
-                        let tx = (((dx + 1.0) * 0.5 * tex.width() as f32) as u32).min(tex.width() - 1);
-                        let ty = (((dy + 1.0) * 0.5 * tex.height() as f32) as u32).min(tex.height() - 1);
+                        let tx =
+                            (((dx + 1.0) * 0.5 * tex.width() as f32) as u32).min(tex.width() - 1);
+                        let ty =
+                            (((dy + 1.0) * 0.5 * tex.height() as f32) as u32).min(tex.height() - 1);
                         tex.get_pixel(tx, ty).0.map(f32::from)
                     }
                     None => self.colour,
@@ -262,11 +327,20 @@ mod tests {
         std::fs::write(dir.path().join("notes.txt"), "x").expect("write");
         let found = discover(&[dir.path().to_owned()]).expect("found");
         assert_eq!(found.len(), 2);
-        assert_eq!(found[0], BackgroundSource::Photo(dir.path().join("room.png")));
+        assert_eq!(
+            found[0],
+            BackgroundSource::Photo(dir.path().join("room.png"))
+        );
         match &found[1] {
             BackgroundSource::Video { frames, .. } => {
-                let names: Vec<_> = frames.iter().map(|f| f.file_name().map(|n| n.to_owned())).collect();
-                assert_eq!(names, ["000000.jpg", "000002.jpg", "000004.jpg"].map(|n| Some(n.into())));
+                let names: Vec<_> = frames
+                    .iter()
+                    .map(|f| f.file_name().map(|n| n.to_owned()))
+                    .collect();
+                assert_eq!(
+                    names,
+                    ["000000.jpg", "000002.jpg", "000004.jpg"].map(|n| Some(n.into()))
+                );
             }
             other => panic!("expected a video, got {other:?}"),
         }
@@ -279,7 +353,16 @@ mod tests {
         for (x, _, p) in src.enumerate_pixels_mut() {
             p.0 = [x as u8 * 30, 100, 7];
         }
-        let out = crop_resize(&src, 4, 3, Crop { zoom: 1.0, pan_x: 0.5, pan_y: 0.5 });
+        let out = crop_resize(
+            &src,
+            4,
+            3,
+            Crop {
+                zoom: 1.0,
+                pan_x: 0.5,
+                pan_y: 0.5,
+            },
+        );
         assert_eq!(out.dimensions(), (4, 3));
         for y in 0..3 {
             assert_eq!(out.get_pixel(0, y).0[1], 100);

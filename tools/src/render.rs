@@ -72,8 +72,14 @@ impl BodyLayer {
 
     /// The ground-truth mask: 255 where the body covers the pixel centre.
     pub fn mask(&self) -> GrayImage {
-        let pixels = self.depth.as_slice().iter().map(|d| if d.is_finite() { 255 } else { 0 }).collect();
-        GrayImage::from_raw(self.width, self.height, pixels).unwrap_or_else(|| GrayImage::new(self.width, self.height))
+        let pixels = self
+            .depth
+            .as_slice()
+            .iter()
+            .map(|d| if d.is_finite() { 255 } else { 0 })
+            .collect();
+        GrayImage::from_raw(self.width, self.height, pixels)
+            .unwrap_or_else(|| GrayImage::new(self.width, self.height))
     }
 }
 
@@ -105,7 +111,12 @@ pub struct BodyRenderer<'a> {
 }
 
 impl<'a> BodyRenderer<'a> {
-    pub fn new(suit: &'a SuitDefinition, subject: &Subject, body: &'a Body, camera: Camera) -> BodyRenderer<'a> {
+    pub fn new(
+        suit: &'a SuitDefinition,
+        subject: &Subject,
+        body: &'a Body,
+        camera: Camera,
+    ) -> BodyRenderer<'a> {
         let meshes = body.parts.iter().map(|p| p.mesh(24, 4.0)).collect();
         let grids = body.parts.iter().map(|p| p.marker_grid(suit)).collect();
         let markers: Vec<(usize, MarkerCell)> = body
@@ -114,7 +125,11 @@ impl<'a> BodyRenderer<'a> {
             .enumerate()
             .flat_map(|(i, p)| p.markers(suit).into_iter().map(move |m| (i, m)))
             .collect();
-        let marker_index = markers.iter().enumerate().map(|(k, (_, m))| (m.id, k as u32)).collect();
+        let marker_index = markers
+            .iter()
+            .enumerate()
+            .map(|(k, (_, m))| (m.id, k as u32))
+            .collect();
         BodyRenderer {
             suit,
             body,
@@ -146,7 +161,11 @@ impl<'a> BodyRenderer<'a> {
                 // Points behind the near plane get a depth below it so the triangle is skipped.
                 screen.push(match self.camera.project_camera(c) {
                     Some(pr) => ScreenVertex::from(pr),
-                    None => ScreenVertex { x: 0.0, y: 0.0, depth: 0.0 },
+                    None => ScreenVertex {
+                        x: 0.0,
+                        y: 0.0,
+                        depth: 0.0,
+                    },
                 });
                 normals.push(Vec3::from(transform.matrix3 * Vec3A::from(v.normal)));
             }
@@ -157,38 +176,60 @@ impl<'a> BodyRenderer<'a> {
             };
             for tri in &mesh.triangles {
                 let [a, b, c] = tri.map(|i| i as usize);
-                draw_triangle(&mut layer.depth, [screen[a], screen[b], screen[c]], Cull::Back, NEAR_CM, |f| {
-                    let w = f.weights;
-                    let (va, vb, vc) = (&mesh.vertices[a], &mesh.vertices[b], &mesh.vertices[c]);
-                    let mut albedo = albedo_plain;
-                    let mut marker = NO_MARKER;
-                    if part.material == Material::Suit {
-                        let u = w[0] * va.u + w[1] * vb.u + w[2] * vc.u;
-                        let s = w[0] * va.s + w[1] * vb.s + w[2] * vc.s;
-                        if let Some(cell) = grid.marker_at(u, s) {
-                            albedo = self.marker_albedo[cell.colour];
-                            marker = self.marker_index.get(&cell.id).copied().unwrap_or(NO_MARKER);
+                draw_triangle(
+                    &mut layer.depth,
+                    [screen[a], screen[b], screen[c]],
+                    Cull::Back,
+                    NEAR_CM,
+                    |f| {
+                        let w = f.weights;
+                        let (va, vb, vc) =
+                            (&mesh.vertices[a], &mesh.vertices[b], &mesh.vertices[c]);
+                        let mut albedo = albedo_plain;
+                        let mut marker = NO_MARKER;
+                        if part.material == Material::Suit {
+                            let u = w[0] * va.u + w[1] * vb.u + w[2] * vc.u;
+                            let s = w[0] * va.s + w[1] * vb.s + w[2] * vc.s;
+                            if let Some(cell) = grid.marker_at(u, s) {
+                                albedo = self.marker_albedo[cell.colour];
+                                marker = self
+                                    .marker_index
+                                    .get(&cell.id)
+                                    .copied()
+                                    .unwrap_or(NO_MARKER);
+                            }
                         }
-                    }
-                    let n = (normals[a] * w[0] + normals[b] * w[1] + normals[c] * w[2]).normalize_or(Vec3::Z);
-                    let diffuse = n.dot(light).max(0.0);
-                    let radiance = (lighting.ambient + (1.0 - lighting.ambient) * diffuse) * lighting.exposure * 255.0;
-                    layer.colour[f.index] = albedo.map(|c| c * radiance);
-                    layer.marker[f.index] = marker;
-                });
+                        let n = (normals[a] * w[0] + normals[b] * w[1] + normals[c] * w[2])
+                            .normalize_or(Vec3::Z);
+                        let diffuse = n.dot(light).max(0.0);
+                        let radiance = (lighting.ambient + (1.0 - lighting.ambient) * diffuse)
+                            * lighting.exposure
+                            * 255.0;
+                        layer.colour[f.index] = albedo.map(|c| c * radiance);
+                        layer.marker[f.index] = marker;
+                    },
+                );
             }
         }
     }
 
     /// World position of a marker's centre and its projected area (0 if it faces away).
-    fn marker_projection(&self, world: &[Affine3A], part: usize, cell: &MarkerCell) -> Option<(Vec2, f32)> {
+    fn marker_projection(
+        &self,
+        world: &[Affine3A],
+        part: usize,
+        cell: &MarkerCell,
+    ) -> Option<(Vec2, f32)> {
         let p = &self.body.parts[part];
         let transform = world[p.joint];
         let (corners, centre) = p.marker_corners(self.suit, cell);
         let centre = self.camera.project(transform.transform_point3(centre))?;
         let mut projected = [Vec2::ZERO; 4];
         for (k, corner) in corners.iter().enumerate() {
-            projected[k] = self.camera.project(transform.transform_point3(*corner))?.pixel;
+            projected[k] = self
+                .camera
+                .project(transform.transform_point3(*corner))?
+                .pixel;
         }
         // Shoelace; outward-wound corners have negative area in pixel coordinates when facing the camera.
         let mut twice_area = 0.0;
@@ -213,9 +254,20 @@ impl<'a> BodyRenderer<'a> {
                 continue;
             }
             let (part, cell) = &self.markers[k];
-            let Some((centre, area)) = self.marker_projection(world, *part, cell) else { continue };
-            let fraction = if area > 0.0 { (count as f32 / area).min(1.0) } else { 0.0 };
-            out.push(VisibleMarker { id: cell.id, colour: cell.colour, centre, visible_fraction: fraction });
+            let Some((centre, area)) = self.marker_projection(world, *part, cell) else {
+                continue;
+            };
+            let fraction = if area > 0.0 {
+                (count as f32 / area).min(1.0)
+            } else {
+                0.0
+            };
+            out.push(VisibleMarker {
+                id: cell.id,
+                colour: cell.colour,
+                centre,
+                visible_fraction: fraction,
+            });
         }
         out
     }
@@ -234,7 +286,13 @@ pub struct Sensor {
 }
 
 /// Separable Gaussian blur of an RGB f32 image in place (`scratch` is reused between calls).
-pub fn gaussian_blur(rgb: &mut [[f32; 3]], width: usize, height: usize, sigma: f32, scratch: &mut Vec<[f32; 3]>) {
+pub fn gaussian_blur(
+    rgb: &mut [[f32; 3]],
+    width: usize,
+    height: usize,
+    sigma: f32,
+    scratch: &mut Vec<[f32; 3]>,
+) {
     if sigma <= 0.0 {
         return;
     }
@@ -306,7 +364,8 @@ pub fn compose(
             out.push((v + sigma * noise).round().clamp(0.0, 255.0) as u8);
         }
     }
-    RgbImage::from_raw(layer.width, layer.height, out).unwrap_or_else(|| RgbImage::new(layer.width, layer.height))
+    RgbImage::from_raw(layer.width, layer.height, out)
+        .unwrap_or_else(|| RgbImage::new(layer.width, layer.height))
 }
 
 #[cfg(test)]
@@ -346,11 +405,20 @@ mod tests {
             hip,
             Vec3::Y,
         );
-        Fixture { suit, body, world, camera }
+        Fixture {
+            suit,
+            body,
+            world,
+            camera,
+        }
     }
 
     fn lighting() -> Lighting {
-        Lighting { direction: Vec3::new(0.3, 1.0, 0.5).normalize(), ambient: 0.5, exposure: 1.0 }
+        Lighting {
+            direction: Vec3::new(0.3, 1.0, 0.5).normalize(),
+            ambient: 0.5,
+            exposure: 1.0,
+        }
     }
 
     /// Möller–Trumbore: distance along the ray to the triangle, if hit.
@@ -396,9 +464,13 @@ mod tests {
         let (mut covered, mut mismatches) = (0, 0);
         for y in 0..h {
             for x in 0..w {
-                let target = f.camera.unproject(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), 100.0);
+                let target = f
+                    .camera
+                    .unproject(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), 100.0);
                 let dir = (target - origin).normalize();
-                let hit = triangles.iter().any(|&t| ray_triangle(origin, dir, t).is_some());
+                let hit = triangles
+                    .iter()
+                    .any(|&t| ray_triangle(origin, dir, t).is_some());
                 covered += hit as usize;
                 if hit != (mask.get_pixel(x, y).0[0] == 255) {
                     mismatches += 1;
@@ -419,7 +491,11 @@ mod tests {
         let visible = renderer.visible_markers(&f.world, &layer);
         let mut checked = 0;
         for m in visible.iter().filter(|m| m.visible_fraction > 0.95) {
-            let k = renderer.markers.iter().position(|(_, c)| c.id == m.id).expect("known marker") as u32;
+            let k = renderer
+                .markers
+                .iter()
+                .position(|(_, c)| c.id == m.id)
+                .expect("known marker") as u32;
             let (mut sum, mut n) = (Vec2::ZERO, 0.0f32);
             for (i, &id) in layer.marker.iter().enumerate() {
                 if id == k {
@@ -435,14 +511,28 @@ mod tests {
             // square wrapped around a limb seen obliquely and pixel quantization: within 0.3·√area
             // pixels, a third of its side (a marker in the wrong cell is a whole 7 cm pitch off).
             let tolerance = (0.3 * n.sqrt()).max(1.0);
-            assert!((sum / n).distance(m.centre) < tolerance, "marker {} centroid {:?} vs {:?}", m.id, sum / n, m.centre);
+            assert!(
+                (sum / n).distance(m.centre) < tolerance,
+                "marker {} centroid {:?} vs {:?}",
+                m.id,
+                sum / n,
+                m.centre
+            );
             // The pixel under the projected centre has the marker's hue.
             let index = m.centre.y as usize * w as usize + m.centre.x as usize;
             let hsv = suitcap::colour::Hsv::from_rgb(layer.colour[index].map(|c| c / 255.0));
             let expected = f.suit.markers[m.colour].hsv.hue;
-            assert!(suitcap::colour::hue_distance(hsv.hue, expected) < 5.0, "marker {}: hue {} vs {expected}", m.id, hsv.hue);
+            assert!(
+                suitcap::colour::hue_distance(hsv.hue, expected) < 5.0,
+                "marker {}: hue {} vs {expected}",
+                m.id,
+                hsv.hue
+            );
         }
-        assert!(checked > 20, "{checked} whole markers of at least 12 pixels");
+        assert!(
+            checked > 20,
+            "{checked} whole markers of at least 12 pixels"
+        );
     }
 
     #[test]

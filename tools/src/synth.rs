@@ -23,7 +23,9 @@ use rayon::prelude::*;
 use suitcap::body::{Body, Subject, SUBJECTS};
 use suitcap::bvh::Motion;
 use suitcap::camera::{Camera, Intrinsics};
-use suitcap::dataset::{self, ClipInfo, Manifest, MarkerRecord, SceneInfo, SubjectInfo, SuitInfo, DATASET_FORMAT};
+use suitcap::dataset::{
+    self, ClipInfo, Manifest, MarkerRecord, SceneInfo, SubjectInfo, SuitInfo, DATASET_FORMAT,
+};
 use suitcap::suit::{splitmix64, SuitDefinition};
 
 use crate::backgrounds::{self, BackgroundSource, Clutter, Crop, VIDEO_FPS};
@@ -124,7 +126,13 @@ pub fn place_camera(
     let towards_camera = Quat::from_rotation_y(azimuth_deg.to_radians()) * facing;
     let centre = (lo + hi) * 0.5;
     let corners: Vec<Vec3> = (0..8)
-        .map(|i| Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z }))
+        .map(|i| {
+            Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            )
+        })
         .collect();
     let (w, h) = (intrinsics.width as f32, intrinsics.height as f32);
     let mut distance = 150.0;
@@ -132,7 +140,12 @@ pub fn place_camera(
         let eye = Vec3::new(centre.x, height_cm, centre.z) + towards_camera * distance;
         let camera = Camera::look_at(intrinsics, eye, centre, Vec3::Y);
         let fits = corners.iter().all(|&c| match camera.project(c) {
-            Some(p) => p.pixel.x > 0.05 * w && p.pixel.x < 0.95 * w && p.pixel.y > 0.05 * h && p.pixel.y < 0.95 * h,
+            Some(p) => {
+                p.pixel.x > 0.05 * w
+                    && p.pixel.x < 0.95 * w
+                    && p.pixel.y > 0.05 * h
+                    && p.pixel.y < 0.95 * h
+            }
             None => false,
         });
         if fits || distance >= max_distance_cm {
@@ -169,18 +182,38 @@ fn to_f32(image: &RgbImage) -> Vec<[f32; 3]> {
 }
 
 fn write_png_rgb(path: &Path, image: &RgbImage) -> anyhow::Result<()> {
-    let file = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let encoder = PngEncoder::new_with_quality(std::io::BufWriter::new(file), CompressionType::Fast, FilterType::Sub);
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let encoder = PngEncoder::new_with_quality(
+        std::io::BufWriter::new(file),
+        CompressionType::Fast,
+        FilterType::Sub,
+    );
     encoder
-        .write_image(image.as_raw(), image.width(), image.height(), image::ExtendedColorType::Rgb8)
+        .write_image(
+            image.as_raw(),
+            image.width(),
+            image.height(),
+            image::ExtendedColorType::Rgb8,
+        )
         .with_context(|| format!("cannot write {}", path.display()))
 }
 
 fn write_png_gray(path: &Path, image: &image::GrayImage) -> anyhow::Result<()> {
-    let file = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let encoder = PngEncoder::new_with_quality(std::io::BufWriter::new(file), CompressionType::Fast, FilterType::Sub);
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let encoder = PngEncoder::new_with_quality(
+        std::io::BufWriter::new(file),
+        CompressionType::Fast,
+        FilterType::Sub,
+    );
     encoder
-        .write_image(image.as_raw(), image.width(), image.height(), image::ExtendedColorType::L8)
+        .write_image(
+            image.as_raw(),
+            image.width(),
+            image.height(),
+            image::ExtendedColorType::L8,
+        )
         .with_context(|| format!("cannot write {}", path.display()))
 }
 
@@ -188,8 +221,15 @@ fn write_png_gray(path: &Path, image: &image::GrayImage) -> anyhow::Result<()> {
 pub fn choose_subject(name: Option<&str>, seed: u64) -> anyhow::Result<&'static Subject> {
     match name {
         Some(n) => Subject::find(n).with_context(|| {
-            let names: Vec<String> = SUBJECTS.iter().enumerate().map(|(i, s)| format!("{i}={}", s.name)).collect();
-            format!("unknown subject '{n}'; built-in subjects: {}", names.join(", "))
+            let names: Vec<String> = SUBJECTS
+                .iter()
+                .enumerate()
+                .map(|(i, s)| format!("{i}={}", s.name))
+                .collect();
+            format!(
+                "unknown subject '{n}'; built-in subjects: {}",
+                names.join(", ")
+            )
         }),
         None => Ok(&SUBJECTS[(splitmix64(seed) % SUBJECTS.len() as u64) as usize]),
     }
@@ -199,23 +239,38 @@ pub fn choose_subject(name: Option<&str>, seed: u64) -> anyhow::Result<&'static 
 pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow::Result<Summary> {
     let started = Instant::now();
     if options.width < 16 || options.height < 16 {
-        bail!("--size {}x{} is too small (at least 16x16)", options.width, options.height);
+        bail!(
+            "--size {}x{} is too small (at least 16x16)",
+            options.width,
+            options.height
+        );
     }
     let suit = SuitDefinition::load_dir(&options.suit_dir)?;
     let clip = Motion::load(&options.bvh)?;
-    suit.skeleton
-        .bind(&clip.skeleton)
-        .with_context(|| format!("{}: the clip does not carry the suit's joints", options.bvh.display()))?;
+    suit.skeleton.bind(&clip.skeleton).with_context(|| {
+        format!(
+            "{}: the clip does not carry the suit's joints",
+            options.bvh.display()
+        )
+    })?;
     let subject = choose_subject(options.subject.as_deref(), options.seed)?;
     let (resampled, source_frames) = clip
         .resample(options.start_frame, options.frames, options.fps)
-        .with_context(|| format!("{}: cannot take the frames asked for", options.bvh.display()))?;
+        .with_context(|| {
+            format!(
+                "{}: cannot take the frames asked for",
+                options.bvh.display()
+            )
+        })?;
     if resampled.frame_count() == 0 {
         bail!("{}: no frames to render", options.bvh.display());
     }
     let skeleton = subject.scale_skeleton(&clip.skeleton);
-    let motion = resampled.with_skeleton(skeleton.clone(), |frame| subject.scale_root_translation(&clip.skeleton, frame));
-    let body = Body::new(subject, &skeleton).with_context(|| format!("{}", options.bvh.display()))?;
+    let motion = resampled.with_skeleton(skeleton.clone(), |frame| {
+        subject.scale_root_translation(&clip.skeleton, frame)
+    });
+    let body =
+        Body::new(subject, &skeleton).with_context(|| format!("{}", options.bvh.display()))?;
     let poses = pose_all(&motion);
 
     // Scene parameters, all from the seed.
@@ -233,7 +288,8 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
         max_distance,
     );
     let to_camera = (camera.position() - Vec3::from(poses[0][0].translation)).normalize_or(Vec3::Z);
-    let light_direction = (Quat::from_rotation_y(rng.gen_range(-1.0..1.0f32)) * Vec3::new(to_camera.x, 0.0, to_camera.z).normalize_or(Vec3::Z)
+    let light_direction = (Quat::from_rotation_y(rng.gen_range(-1.0..1.0f32))
+        * Vec3::new(to_camera.x, 0.0, to_camera.z).normalize_or(Vec3::Z)
         + Vec3::Y * rng.gen_range(0.3..2.0f32))
     .normalize();
     let scene = Scene {
@@ -253,13 +309,21 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
     // Background plate and clutter.
     let sources = backgrounds::discover(&options.backgrounds)?;
     let source = &sources[rng.gen_range(0..sources.len())];
-    let crop = Crop { zoom: rng.gen_range(1.0..1.4), pan_x: rng.gen(), pan_y: rng.gen() };
+    let crop = Crop {
+        zoom: rng.gen_range(1.0..1.4),
+        pan_x: rng.gen(),
+        pan_y: rng.gen(),
+    };
     let (w, h) = (options.width, options.height);
     let duration = motion.frame_count() as f64 / options.fps;
     let (plates, background_names, background_is_video) = match source {
         BackgroundSource::Photo(path) => {
             let plate = backgrounds::load_plate(path, w, h, crop)?;
-            (Plates::Still(Arc::new(to_f32(&plate))), vec![path.display().to_string()], false)
+            (
+                Plates::Still(Arc::new(to_f32(&plate))),
+                vec![path.display().to_string()],
+                false,
+            )
         }
         BackgroundSource::Video { frames, .. } => {
             let needed = ((duration * VIDEO_FPS).ceil() as usize + 1).min(frames.len());
@@ -268,7 +332,11 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
                 .par_iter()
                 .map(|p| backgrounds::load_plate(p, w, h, crop).map(|img| Arc::new(to_f32(&img))))
                 .collect::<Result<Vec<_>, _>>()?;
-            (Plates::Video(plates), used.iter().map(|p| p.display().to_string()).collect(), true)
+            (
+                Plates::Video(plates),
+                used.iter().map(|p| p.display().to_string()).collect(),
+                true,
+            )
         }
     };
     let photos: Vec<&PathBuf> = sources
@@ -280,25 +348,42 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
         .collect();
     let texture_photo = match photos.len() {
         0 => None,
-        n => Some(backgrounds::load_plate(photos[rng.gen_range(0..n)], w, h, Crop { zoom: 1.0, pan_x: 0.5, pan_y: 0.5 })?),
+        n => Some(backgrounds::load_plate(
+            photos[rng.gen_range(0..n)],
+            w,
+            h,
+            Crop {
+                zoom: 1.0,
+                pan_x: 0.5,
+                pan_y: 0.5,
+            },
+        )?),
     };
-    let clutter: Vec<Clutter> = (0..rng.gen_range(3..8)).map(|_| Clutter::random(&mut rng, w, h, texture_photo.as_ref())).collect();
+    let clutter: Vec<Clutter> = (0..rng.gen_range(3..8))
+        .map(|_| Clutter::random(&mut rng, w, h, texture_photo.as_ref()))
+        .collect();
 
     // Output directory: an old manifest goes first, so an interrupted run leaves an incomplete dataset.
     let out = &options.out;
     let manifest_path = out.join("manifest.toml");
     if manifest_path.exists() && !options.overwrite {
-        bail!("{} already holds a dataset; pass --overwrite to replace it", out.display());
+        bail!(
+            "{} already holds a dataset; pass --overwrite to replace it",
+            out.display()
+        );
     }
     for sub in ["frames", "masks"] {
         let dir = out.join(sub);
         if dir.exists() && options.overwrite {
-            std::fs::remove_dir_all(&dir).with_context(|| format!("cannot clear {}", dir.display()))?;
+            std::fs::remove_dir_all(&dir)
+                .with_context(|| format!("cannot clear {}", dir.display()))?;
         }
-        std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        std::fs::create_dir_all(&dir)
+            .with_context(|| format!("cannot create {}", dir.display()))?;
     }
     if manifest_path.exists() {
-        std::fs::remove_file(&manifest_path).with_context(|| format!("cannot remove {}", manifest_path.display()))?;
+        std::fs::remove_file(&manifest_path)
+            .with_context(|| format!("cannot remove {}", manifest_path.display()))?;
     }
 
     // Render every frame in parallel.
@@ -311,7 +396,11 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
             |(layer, background, scratch), k| -> anyhow::Result<Vec<MarkerRecord>> {
                 let t = k as f64 / options.fps;
                 let world = &poses[k];
-                let lighting = Lighting { direction: scene.light_direction, ambient: scene.ambient, exposure: scene.exposure };
+                let lighting = Lighting {
+                    direction: scene.light_direction,
+                    ambient: scene.ambient,
+                    exposure: scene.exposure,
+                };
                 renderer.draw(world, &lighting, layer);
                 background.clear();
                 background.extend_from_slice(plates.at(t));
@@ -320,9 +409,18 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
                 }
                 let gain = 1.0
                     + scene.exposure_drift
-                        * (std::f32::consts::TAU * t as f32 / scene.exposure_period_s + scene.exposure_phase).sin();
-                let sensor = Sensor { gain, blur_sigma: scene.blur_sigma, read_noise: scene.read_noise, shot_noise: scene.shot_noise };
-                let mut frame_rng = Pcg64Mcg::seed_from_u64(splitmix64(options.seed.wrapping_mul(0x9E37).wrapping_add(k as u64)));
+                        * (std::f32::consts::TAU * t as f32 / scene.exposure_period_s
+                            + scene.exposure_phase)
+                            .sin();
+                let sensor = Sensor {
+                    gain,
+                    blur_sigma: scene.blur_sigma,
+                    read_noise: scene.read_noise,
+                    shot_noise: scene.shot_noise,
+                };
+                let mut frame_rng = Pcg64Mcg::seed_from_u64(splitmix64(
+                    options.seed.wrapping_mul(0x9E37).wrapping_add(k as u64),
+                ));
                 let image = compose(background, layer, &sensor, &mut frame_rng, scratch);
                 write_png_rgb(&dataset::frame_path(out, k), &image)?;
                 write_png_gray(&dataset::mask_path(out, k), &layer.mask())?;
@@ -347,7 +445,8 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
 
     let write = |name: &str, bytes: &[u8]| {
         let path = out.join(name);
-        suitcap::io::write_atomic(&path, bytes).with_context(|| format!("cannot write {}", path.display()))
+        suitcap::io::write_atomic(&path, bytes)
+            .with_context(|| format!("cannot write {}", path.display()))
     };
     motion.write(&out.join("motion.bvh"))?;
     write("camera.toml", scene.camera.to_toml().as_bytes())?;
@@ -363,7 +462,11 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
         height: h,
         seed: options.seed,
         clip: ClipInfo {
-            name: options.bvh.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+            name: options
+                .bvh
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
             source_fps: clip.frame_rate(),
             start_frame: options.start_frame,
             source_frames,

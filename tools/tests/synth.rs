@@ -30,8 +30,10 @@ fn options(out: &Path, seed: u64) -> SynthOptions {
 fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
     let mut out = Vec::new();
     for sub in ["frames", "masks"] {
-        let mut entries: Vec<PathBuf> =
-            std::fs::read_dir(dir.join(sub)).expect("dir").map(|e| e.expect("entry").path()).collect();
+        let mut entries: Vec<PathBuf> = std::fs::read_dir(dir.join(sub))
+            .expect("dir")
+            .map(|e| e.expect("entry").path())
+            .collect();
         entries.sort();
         for path in entries {
             let bytes = std::fs::read(&path).expect("read");
@@ -39,7 +41,10 @@ fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
         }
     }
     for name in ["motion.bvh", "camera.toml", "markers.csv", "manifest.toml"] {
-        out.push((PathBuf::from(name), std::fs::read(dir.join(name)).expect("read")));
+        out.push((
+            PathBuf::from(name),
+            std::fs::read(dir.join(name)).expect("read"),
+        ));
     }
     out
 }
@@ -47,14 +52,21 @@ fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
 #[test]
 fn the_same_seed_gives_byte_identical_output() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let (a, b, c) = (tmp.path().join("a"), tmp.path().join("b"), tmp.path().join("c"));
+    let (a, b, c) = (
+        tmp.path().join("a"),
+        tmp.path().join("b"),
+        tmp.path().join("c"),
+    );
     generate(&options(&a, 7), &|| {}).expect("first run");
     generate(&options(&b, 7), &|| {}).expect("second run");
     generate(&options(&c, 8), &|| {}).expect("other seed");
     let (fa, fb, fc) = (files(&a), files(&b), files(&c));
     assert_eq!(fa.len(), 6 + 6 + 4);
     assert_eq!(fa, fb, "same seed, different bytes");
-    let frame_differs = fa.iter().zip(&fc).any(|(x, y)| x.0.starts_with("frames") && x.1 != y.1);
+    let frame_differs = fa
+        .iter()
+        .zip(&fc)
+        .any(|(x, y)| x.0.starts_with("frames") && x.1 != y.1);
     assert!(frame_differs, "another seed should render different frames");
 }
 
@@ -67,17 +79,30 @@ fn the_dataset_reopens_and_is_aligned_with_the_clip() {
     assert_eq!(dataset.frame_count(), 6);
     assert_eq!(dataset.motion.frame_count(), 6);
     // 120 frames/s → 30 frames/s: every fourth source frame from the start frame.
-    assert_eq!(dataset.manifest.clip.source_frames, vec![12, 16, 20, 24, 28, 32]);
-    let clip = suitcap::bvh::Motion::load(&repo("tests/data/mocap/cmu_02_01_walk.bvh")).expect("clip");
+    assert_eq!(
+        dataset.manifest.clip.source_frames,
+        vec![12, 16, 20, 24, 28, 32]
+    );
+    let clip =
+        suitcap::bvh::Motion::load(&repo("tests/data/mocap/cmu_02_01_walk.bvh")).expect("clip");
     // Joint angles are the clip's (only the root translation and the offsets are scaled).
     let k = 3;
     let source = clip.frame(dataset.manifest.clip.source_frames[k]);
-    for (channel, (a, b)) in dataset.motion.frame(k).iter().zip(source).enumerate().skip(3) {
+    for (channel, (a, b)) in dataset
+        .motion
+        .frame(k)
+        .iter()
+        .zip(source)
+        .enumerate()
+        .skip(3)
+    {
         assert!((a - b).abs() < 1e-4, "channel {channel}: {a} vs {b}");
     }
     let markers = dataset.markers().expect("markers.csv");
     assert!(!markers.is_empty());
-    assert!(markers.iter().all(|m| m.frame < 6 && (0.0..=1.0).contains(&m.visible_fraction)));
+    assert!(markers
+        .iter()
+        .all(|m| m.frame < 6 && (0.0..=1.0).contains(&m.visible_fraction)));
     let mask = image::open(dataset.mask_path(0)).expect("mask").to_luma8();
     assert_eq!(mask.dimensions(), (160, 120));
     assert!(mask.pixels().all(|p| p.0[0] == 0 || p.0[0] == 255));
@@ -97,7 +122,10 @@ fn bad_clips_are_clear_errors() {
     let mut o = options(&tmp.path().join("x"), 1);
     o.bvh = renamed;
     let err = format!("{:#}", generate(&o, &|| {}).expect_err("unknown joint"));
-    assert!(err.contains("rShin") && err.contains("renamed.bvh"), "{err}");
+    assert!(
+        err.contains("rShin") && err.contains("renamed.bvh"),
+        "{err}"
+    );
 
     let truncated = tmp.path().join("truncated.bvh");
     std::fs::write(&truncated, &text[..text.len() / 2]).expect("write");

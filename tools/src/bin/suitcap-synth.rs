@@ -14,7 +14,11 @@ const BUNDLED_BACKGROUNDS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests
 const DEFAULT_SUIT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../suits/default");
 
 #[derive(Parser)]
-#[command(name = "suitcap-synth", version, about = "Render a synthetic, mocap-aligned marker-suit dataset")]
+#[command(
+    name = "suitcap-synth",
+    version,
+    about = "Render a synthetic, mocap-aligned marker-suit dataset"
+)]
 struct Args {
     /// BVH clip that drives the body (CMU/Daz joint names, e.g. tests/data/mocap/*.bvh).
     #[arg(long)]
@@ -54,18 +58,30 @@ struct Args {
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let (w, h) = text.split_once('x').ok_or_else(|| format!("--size '{text}' is not WIDTHxHEIGHT"))?;
-    let w = w.parse::<u32>().map_err(|_| format!("--size '{text}': bad width"))?;
-    let h = h.parse::<u32>().map_err(|_| format!("--size '{text}': bad height"))?;
+    let (w, h) = text
+        .split_once('x')
+        .ok_or_else(|| format!("--size '{text}' is not WIDTHxHEIGHT"))?;
+    let w = w
+        .parse::<u32>()
+        .map_err(|_| format!("--size '{text}': bad width"))?;
+    let h = h
+        .parse::<u32>()
+        .map_err(|_| format!("--size '{text}': bad height"))?;
     Ok((w, h))
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
     let (width, height) = parse_size(&args.size).map_err(anyhow::Error::msg)?;
     if let Some(threads) = args.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(threads).build_global()?;
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()?;
     }
-    let backgrounds = if args.backgrounds.is_empty() { vec![PathBuf::from(BUNDLED_BACKGROUNDS)] } else { args.backgrounds };
+    let backgrounds = if args.backgrounds.is_empty() {
+        vec![PathBuf::from(BUNDLED_BACKGROUNDS)]
+    } else {
+        args.backgrounds
+    };
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let options = SynthOptions {
         bvh: args.bvh,
@@ -83,7 +99,10 @@ fn run(args: Args) -> anyhow::Result<()> {
         command,
     };
     let bar = ProgressBar::new(args.frames.unwrap_or(0) as u64);
-    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} {eta}").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     if args.frames.is_none() {
         bar.set_length(0);
     }
