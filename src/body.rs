@@ -11,7 +11,7 @@
 
 use std::f32::consts::TAU;
 
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 
 use crate::skeleton::Skeleton;
 use crate::suit::SuitDefinition;

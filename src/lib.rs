@@ -21,6 +21,7 @@ pub mod colour;
 pub mod dataset;
 pub mod io;
 pub mod raster;
+pub mod segment;
 pub mod skeleton;
 pub mod source;
 pub mod suit;
