@@ -20,6 +20,8 @@ pub mod camera;
 pub mod colour;
 pub mod dataset;
 pub mod io;
+pub mod mask;
+pub mod model;
 pub mod raster;
 pub mod segment;
 pub mod skeleton;

@@ -224,6 +224,17 @@ impl GridGraph {
         self.down[y * self.width + x] = w;
     }
 
+    /// Mutable views of the four capacity arrays (source, sink, right, down), for a caller that fills
+    /// a whole frame's graph at once. Every value written must be finite and `>= 0`.
+    pub fn parts_mut(&mut self) -> (&mut [f32], &mut [f32], &mut [f32], &mut [f32]) {
+        (
+            &mut self.source,
+            &mut self.sink,
+            &mut self.right,
+            &mut self.down,
+        )
+    }
+
     pub fn source(&self) -> &[f32] {
         &self.source
     }

@@ -3,10 +3,20 @@
 //!
 //! The segmenter minimises a binary energy on the pixel grid — unaries from learned colour, gradient,
 //! motion and temporal lookup tables, pairwise weights from the learned neighbourhood table — with an
-//! s-t minimum cut. This module so far holds the cut itself: [`maxflow`], a grid max-flow written for
-//! the 4-connected pixel grid, and [`gcg`], the GCG1 file format in which frame graphs are exchanged
-//! with the reference solver (`../shared/peers/maxflow/`). The learned tables and the per-frame graph
-//! construction are not written yet.
+//! s-t minimum cut, then keeps one person region. [`features`] quantises pixels, [`tables`] learns and
+//! stores the likelihoods, [`train`] fits them to frames with masks, [`segmenter`] runs them per frame
+//! on [`maxflow`] (a grid max-flow written for this) and [`cleanup`]; [`gcg`] reads and writes frame
+//! graphs in the GCG1 format of the reference solver (`../shared/peers/maxflow/`). The [`Mask`]
+//! (crate::mask::Mask) it returns goes to marker detection.
 
+pub mod cleanup;
+pub mod features;
 pub mod gcg;
 pub mod maxflow;
+pub mod segmenter;
+pub mod tables;
+pub mod train;
+
+pub use segmenter::{Segmentation, Segmenter, SegmenterOptions, StageTimes};
+pub use tables::{SegmenterTables, Weights};
+pub use train::{train_segmenter, TrainReport, TrainingFrame};

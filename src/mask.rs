@@ -1,0 +1,136 @@
+//! A binary person mask: what the segmenter gives to every later stage.
+//!
+//! A [`Mask`] is a width × height grid of booleans (`true` = person). It converts to and from 8-bit grey
+//! images (255 = person; any value ≥ 128 reads as person) and measures its agreement with another mask
+//! by intersection over union.
+
+use image::GrayImage;
+
+/// Which pixels belong to the person.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Mask {
+    width: u32,
+    height: u32,
+    pixels: Vec<bool>,
+}
+
+impl Mask {
+    /// An all-background mask.
+    pub fn empty(width: u32, height: u32) -> Mask {
+        Mask {
+            width,
+            height,
+            pixels: vec![false; width as usize * height as usize],
+        }
+    }
+
+    /// A mask from row-major pixels; `None` if the length is not `width × height`.
+    pub fn from_pixels(width: u32, height: u32, pixels: Vec<bool>) -> Option<Mask> {
+        (pixels.len() == width as usize * height as usize).then_some(Mask {
+            width,
+            height,
+            pixels,
+        })
+    }
+
+    /// From a grey image: ≥ 128 is person.
+    pub fn from_gray(image: &GrayImage) -> Mask {
+        Mask {
+            width: image.width(),
+            height: image.height(),
+            pixels: image.pixels().map(|p| p.0[0] >= 128).collect(),
+        }
+    }
+
+    /// To a grey image: 255 person, 0 background.
+    pub fn to_gray(&self) -> GrayImage {
+        let data = self
+            .pixels
+            .iter()
+            .map(|&p| if p { 255 } else { 0 })
+            .collect();
+        GrayImage::from_raw(self.width, self.height, data)
+            .unwrap_or_else(|| GrayImage::new(self.width, self.height))
+    }
+
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    pub fn pixels(&self) -> &[bool] {
+        &self.pixels
+    }
+
+    pub fn pixels_mut(&mut self) -> &mut [bool] {
+        &mut self.pixels
+    }
+
+    pub fn get(&self, x: u32, y: u32) -> bool {
+        self.pixels[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Number of person pixels.
+    pub fn area(&self) -> usize {
+        self.pixels.iter().filter(|&&p| p).count()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        !self.pixels.iter().any(|&p| p)
+    }
+
+    /// Bounding box of the person pixels: (x0, y0, x1, y1) with x1, y1 exclusive.
+    pub fn bounding_box(&self) -> Option<(u32, u32, u32, u32)> {
+        let w = self.width as usize;
+        let mut bounds: Option<(u32, u32, u32, u32)> = None;
+        for (i, _) in self.pixels.iter().enumerate().filter(|(_, &p)| p) {
+            let (x, y) = ((i % w) as u32, (i / w) as u32);
+            bounds = Some(match bounds {
+                None => (x, y, x + 1, y + 1),
+                Some((x0, y0, x1, y1)) => (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1)),
+            });
+        }
+        bounds
+    }
+
+    /// Intersection over union with `other` (same size); 1 when both are empty.
+    pub fn iou(&self, other: &Mask) -> f64 {
+        let (mut inter, mut union) = (0usize, 0usize);
+        for (&a, &b) in self.pixels.iter().zip(&other.pixels) {
+            inter += (a && b) as usize;
+            union += (a || b) as usize;
+        }
+        if union == 0 {
+            1.0
+        } else {
+            inter as f64 / union as f64
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn iou_of_two_4x4_masks() {
+        // A: left half (8 px). B: top half (8 px). Overlap: top-left quarter (4 px). Union 12.
+        let a = Mask::from_pixels(4, 4, (0..16).map(|i| i % 4 < 2).collect()).expect("size");
+        let b = Mask::from_pixels(4, 4, (0..16).map(|i| i < 8).collect()).expect("size");
+        assert!((a.iou(&b) - 4.0 / 12.0).abs() < 1e-12);
+        assert_eq!(a.iou(&a), 1.0);
+        assert_eq!(Mask::empty(4, 4).iou(&Mask::empty(4, 4)), 1.0);
+        assert_eq!(a.bounding_box(), Some((0, 0, 2, 4)));
+        assert_eq!(Mask::empty(4, 4).bounding_box(), None);
+    }
+
+    #[test]
+    fn grey_round_trip() {
+        let a = Mask::from_pixels(4, 4, (0..16).map(|i| i % 3 == 0).collect()).expect("size");
+        assert_eq!(Mask::from_gray(&a.to_gray()), a);
+        assert!(Mask::from_pixels(4, 4, vec![true; 15]).is_none());
+    }
+}

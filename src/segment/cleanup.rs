@@ -1,0 +1,199 @@
+//! Clean-up of the cut: keep one person region and fill its small holes.
+//!
+//! The min-cut labels every pixel independently of any notion of "one person", so stray foreground
+//! (a suit-coloured object in the room) and small background holes (a shadowed fold) remain.
+//! [`keep_person_region`] labels the 4-connected foreground components, keeps the one with the highest
+//! score (the caller scores pixels, e.g. suit cloth next to a marker, so that a large flat green poster
+//! does not beat a smaller person) if it is big enough, and removes the rest; [`fill_holes`] fills background
+//! components that do not touch the image border and are smaller than a limit. Both report what they
+//! changed, which the segmenter passes on in its output.
+
+/// What the clean-up changed in one frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CleanupReport {
+    pub components_removed: usize,
+    pub pixels_removed: usize,
+    pub holes_filled: usize,
+    pub pixels_filled: usize,
+}
+
+/// 4-connected components of pixels equal to `value`; returns the component id of every pixel
+/// (`u32::MAX` for the other value) and each component's pixel count and whether it touches the border.
+pub fn components(
+    labels: &[bool],
+    width: usize,
+    height: usize,
+    value: bool,
+    ids: &mut Vec<u32>,
+) -> Vec<(usize, bool)> {
+    ids.clear();
+    ids.resize(labels.len(), u32::MAX);
+    let mut stats = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..labels.len() {
+        if labels[start] != value || ids[start] != u32::MAX {
+            continue;
+        }
+        let id = stats.len() as u32;
+        let (mut count, mut border) = (0usize, false);
+        ids[start] = id;
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            count += 1;
+            let (x, y) = (i % width, i / width);
+            border |= x == 0 || y == 0 || x + 1 == width || y + 1 == height;
+            let mut visit = |j: usize| {
+                if labels[j] == value && ids[j] == u32::MAX {
+                    ids[j] = id;
+                    stack.push(j);
+                }
+            };
+            if x > 0 {
+                visit(i - 1);
+            }
+            if x + 1 < width {
+                visit(i + 1);
+            }
+            if y > 0 {
+                visit(i - width);
+            }
+            if y + 1 < height {
+                visit(i + width);
+            }
+        }
+        stats.push((count, border));
+    }
+    stats
+}
+
+/// Keeps the foreground component with the highest total `score` (ties: the larger) if it has at least
+/// `min_area` pixels; clears everything else. With no component that large the mask becomes empty.
+pub fn keep_person_region(
+    labels: &mut [bool],
+    width: usize,
+    height: usize,
+    score: impl Fn(usize) -> f32,
+    min_area: usize,
+    ids: &mut Vec<u32>,
+) -> CleanupReport {
+    let stats = components(labels, width, height, true, ids);
+    let mut scores = vec![0.0f32; stats.len()];
+    for (i, &id) in ids.iter().enumerate() {
+        if id != u32::MAX {
+            scores[id as usize] += score(i);
+        }
+    }
+    let best = (0..stats.len())
+        .filter(|&c| stats[c].0 >= min_area)
+        .max_by(|&a, &b| {
+            scores[a]
+                .total_cmp(&scores[b])
+                .then(stats[a].0.cmp(&stats[b].0))
+        });
+    let mut report = CleanupReport::default();
+    for (c, &(count, _)) in stats.iter().enumerate() {
+        if Some(c) != best {
+            report.components_removed += 1;
+            report.pixels_removed += count;
+        }
+    }
+    for (label, &id) in labels.iter_mut().zip(ids.iter()) {
+        if id != u32::MAX && Some(id as usize) != best {
+            *label = false;
+        }
+    }
+    report
+}
+
+/// Fills background components that do not touch the border and have at most `max_hole` pixels.
+pub fn fill_holes(
+    labels: &mut [bool],
+    width: usize,
+    height: usize,
+    max_hole: usize,
+    ids: &mut Vec<u32>,
+    report: &mut CleanupReport,
+) {
+    let stats = components(labels, width, height, false, ids);
+    let fill: Vec<bool> = stats
+        .iter()
+        .map(|&(count, border)| !border && count <= max_hole)
+        .collect();
+    for (c, &f) in fill.iter().enumerate() {
+        if f {
+            report.holes_filled += 1;
+            report.pixels_filled += stats[c].0;
+        }
+    }
+    for (label, &id) in labels.iter_mut().zip(ids.iter()) {
+        if id != u32::MAX && fill[id as usize] {
+            *label = true;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(rows: &[&str]) -> (Vec<bool>, usize, usize) {
+        let w = rows[0].len();
+        (
+            rows.iter()
+                .flat_map(|r| r.chars().map(|c| c == '#'))
+                .collect(),
+            w,
+            rows.len(),
+        )
+    }
+
+    #[test]
+    fn keeps_the_highest_scoring_region() {
+        let (mut m, w, h) = grid(&["##...", "##..#", ".....", "...##"]);
+        let mut ids = Vec::new();
+        // Equal scores: the larger (the 2×2 block) wins.
+        let report = keep_person_region(&mut m, w, h, |_| 1.0, 1, &mut ids);
+        assert_eq!(m, grid(&["##...", "##...", ".....", "....."]).0);
+        assert_eq!(
+            report,
+            CleanupReport {
+                components_removed: 2,
+                pixels_removed: 3,
+                ..Default::default()
+            }
+        );
+        // Score the bottom-right pair higher: it wins despite being smaller.
+        let (mut m, _, _) = grid(&["##...", "##..#", ".....", "...##"]);
+        keep_person_region(
+            &mut m,
+            w,
+            h,
+            |i| if i >= 18 { 10.0 } else { 1.0 },
+            1,
+            &mut ids,
+        );
+        assert_eq!(m, grid(&[".....", ".....", ".....", "...##"]).0);
+    }
+
+    #[test]
+    fn too_small_a_region_leaves_an_empty_mask() {
+        let (mut m, w, h) = grid(&["#....", ".....", "....#"]);
+        let mut ids = Vec::new();
+        keep_person_region(&mut m, w, h, |_| 1.0, 2, &mut ids);
+        assert!(m.iter().all(|&p| !p));
+    }
+
+    #[test]
+    fn fills_enclosed_holes_but_not_the_outside() {
+        let (mut m, w, h) = grid(&[".....", ".###.", ".#.#.", ".###.", "....."]);
+        let mut ids = Vec::new();
+        let mut report = CleanupReport::default();
+        fill_holes(&mut m, w, h, 1, &mut ids, &mut report);
+        assert_eq!(m, grid(&[".....", ".###.", ".###.", ".###.", "....."]).0);
+        assert_eq!((report.holes_filled, report.pixels_filled), (1, 1));
+        let (mut m, _, _) = grid(&[".....", ".###.", ".#.#.", ".###.", "....."]);
+        let mut report = CleanupReport::default();
+        fill_holes(&mut m, w, h, 0, &mut ids, &mut report);
+        assert_eq!(report.holes_filled, 0);
+    }
+}

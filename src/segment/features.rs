@@ -1,0 +1,462 @@
+//! Per-pixel features of the segmenter: colour bins, hue/saturation for neighbour contrasts, gradients.
+//!
+//! A frame is first box-downscaled by the cut's factor; each pixel then gets, through a 6-bit-per-channel
+//! RGB lookup table ([`ColourLut`]):
+//! - a colour bin of (hue, saturation, value) for chromatic pixels, or of value alone for pixels whose
+//!   saturation or value is too low for hue to mean anything ([`MIN_SATURATION`], [`MIN_VALUE`]);
+//! - its hue and saturation, quantised to bytes, for the neighbourhood contrast bins;
+//! and from the value channel its horizontal and vertical central-difference gradients. The tables of
+//! `tables` are indexed by these bins.
+
+use image::RgbImage;
+
+use crate::colour::Hsv;
+
+/// Below this saturation a pixel is achromatic.
+pub const MIN_SATURATION: f32 = 0.12;
+/// Below this value a pixel is achromatic.
+pub const MIN_VALUE: f32 = 0.08;
+
+pub const HUE_BINS: usize = 36;
+pub const SAT_BINS: usize = 6;
+pub const VAL_BINS: usize = 4;
+pub const GREY_BINS: usize = 16;
+/// Number of colour bins: chromatic (hue × saturation × value) then achromatic (value).
+pub const COLOUR_BINS: usize = HUE_BINS * SAT_BINS * VAL_BINS + GREY_BINS;
+
+/// Neighbour contrast bins: 12 hue-difference bins (6° wide up to 60°, one beyond, one for pairs with an
+/// achromatic pixel, which use the value difference instead) × 6 saturation-difference bins.
+pub const DHUE_BINS: usize = 12;
+pub const DSAT_BINS: usize = 6;
+pub const CONTRAST_BINS: usize = DHUE_BINS * DSAT_BINS;
+
+/// Gradient bins per axis (0, 2, 4, 8, 16, 32, 64, 128 on the 0–255 value scale).
+pub const GRADIENT_BINS: usize = 8;
+/// Temporal difference bins (0, 3, 6, 12, 24, 48, 96).
+pub const TEMPORAL_BINS: usize = 7;
+/// Marker proximity bins: chamfer distance (pixels at the cut's resolution) to the nearest pixel of a
+/// suit marker colour: 0, 1, 2, 3, 4–5, 6–7, 8–11, 12–15, 16 and more.
+pub const PROXIMITY_BINS: usize = 9;
+
+/// Which pixels have one of the suit's marker colours (hue within the suit's tolerance of a marker
+/// hue, saturation and value above its gates).
+#[derive(Clone, Debug)]
+pub struct MarkerGate {
+    hue: [bool; 256],
+    /// Hues of the suit's cloth (its background colour).
+    cloth_hue: [bool; 256],
+    min_saturation: u8,
+    min_value: u8,
+}
+
+impl MarkerGate {
+    pub fn new(suit: &crate::suit::SuitDefinition) -> MarkerGate {
+        let gates = suit.detection;
+        MarkerGate {
+            hue: std::array::from_fn(|q| {
+                let hue = (q as f32 + 0.5) * 360.0 / 256.0;
+                suit.markers
+                    .iter()
+                    .any(|m| crate::colour::hue_distance(hue, m.hsv.hue) <= gates.hue_tolerance_deg)
+            }),
+            cloth_hue: std::array::from_fn(|q| {
+                let hue = (q as f32 + 0.5) * 360.0 / 256.0;
+                crate::colour::hue_distance(hue, suit.background.hsv.hue) <= gates.hue_tolerance_deg
+            }),
+            min_saturation: (gates.min_saturation * 255.0) as u8,
+            min_value: (gates.min_value * 255.0) as u8,
+        }
+    }
+
+    #[inline]
+    pub fn is_marker(&self, c: PixelColour) -> bool {
+        c.chromatic
+            && c.sat >= self.min_saturation
+            && c.val >= self.min_value
+            && self.hue[c.hue as usize]
+    }
+
+    /// Does the pixel have the suit cloth's hue?
+    #[inline]
+    pub fn is_cloth(&self, c: PixelColour) -> bool {
+        c.chromatic
+            && c.sat >= self.min_saturation
+            && c.val >= self.min_value
+            && self.cloth_hue[c.hue as usize]
+    }
+}
+
+/// Proximity classes the colour table is split by: within 1 pixel of a marker colour, 2–3, 4–7, 8+.
+pub const PROXIMITY_CLASSES: usize = 4;
+
+/// Proximity class of a proximity bin.
+#[inline]
+pub fn proximity_class(bin: u8) -> usize {
+    match bin {
+        0 | 1 => 0,
+        2 | 3 => 1,
+        4 | 5 => 2,
+        _ => 3,
+    }
+}
+
+/// Index into the joint colour × proximity table.
+#[inline]
+pub fn colour_index(colour: PixelColour, proximity_bin: u8) -> usize {
+    proximity_class(proximity_bin) * COLOUR_BINS + colour.bin as usize
+}
+
+/// Bin of a chamfer distance in pixels.
+#[inline]
+pub fn proximity_bin(d: u32) -> usize {
+    match d {
+        0..=3 => d as usize,
+        4..=5 => 4,
+        6..=7 => 5,
+        8..=11 => 6,
+        12..=15 => 7,
+        _ => 8,
+    }
+}
+
+/// Quantised colour of one pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PixelColour {
+    pub bin: u16,
+    /// Hue on 0–255 for the full circle.
+    pub hue: u8,
+    /// Saturation on 0–255.
+    pub sat: u8,
+    /// Value on 0–255.
+    pub val: u8,
+    pub chromatic: bool,
+}
+
+/// Colour bin of an RGB pixel (exact, without the lookup table).
+pub fn classify(r: u8, g: u8, b: u8) -> PixelColour {
+    let hsv = Hsv::from_rgb([r as f32 / 255.0, g as f32 / 255.0, b as f32 / 255.0]);
+    let chromatic = hsv.saturation >= MIN_SATURATION && hsv.value >= MIN_VALUE;
+    let bin = if chromatic {
+        let h = ((hsv.hue / 360.0 * HUE_BINS as f32) as usize).min(HUE_BINS - 1);
+        let s = (((hsv.saturation - MIN_SATURATION) / (1.0 - MIN_SATURATION) * SAT_BINS as f32)
+            as usize)
+            .min(SAT_BINS - 1);
+        let v = ((hsv.value * VAL_BINS as f32) as usize).min(VAL_BINS - 1);
+        (h * SAT_BINS + s) * VAL_BINS + v
+    } else {
+        HUE_BINS * SAT_BINS * VAL_BINS
+            + ((hsv.value * GREY_BINS as f32) as usize).min(GREY_BINS - 1)
+    };
+    PixelColour {
+        bin: bin as u16,
+        hue: ((hsv.hue / 360.0 * 256.0) as u32).min(255) as u8,
+        sat: (hsv.saturation * 255.0).round() as u8,
+        val: (hsv.value * 255.0).round() as u8,
+        chromatic,
+    }
+}
+
+/// RGB (6 bits per channel) → [`PixelColour`], 262,144 entries, built once per segmenter.
+#[derive(Clone, Debug)]
+pub struct ColourLut {
+    table: Vec<PixelColour>,
+}
+
+impl Default for ColourLut {
+    fn default() -> Self {
+        ColourLut::new()
+    }
+}
+
+impl ColourLut {
+    pub fn new() -> ColourLut {
+        let mut table = Vec::with_capacity(1 << 18);
+        for r in 0..64u32 {
+            for g in 0..64u32 {
+                for b in 0..64u32 {
+                    let up = |c: u32| ((c << 2) | (c >> 4)) as u8;
+                    table.push(classify(up(r), up(g), up(b)));
+                }
+            }
+        }
+        ColourLut { table }
+    }
+
+    #[inline]
+    pub fn get(&self, [r, g, b]: [u8; 3]) -> PixelColour {
+        self.table[((r as usize >> 2) << 12) | ((g as usize >> 2) << 6) | (b as usize >> 2)]
+    }
+}
+
+/// Contrast bin of two neighbouring pixels.
+#[inline]
+pub fn contrast_bin(a: PixelColour, b: PixelColour) -> usize {
+    let dh = if a.chromatic && b.chromatic {
+        let d = a.hue.wrapping_sub(b.hue).min(b.hue.wrapping_sub(a.hue)) as u32; // 0..128 = 0..180°
+                                                                                 // 6° is 4.27 units on the 256-unit circle.
+        ((d * 15 / 64) as usize).min(DHUE_BINS - 2)
+    } else {
+        DHUE_BINS - 1
+    };
+    let ds = if a.chromatic && b.chromatic {
+        a.sat.abs_diff(b.sat)
+    } else {
+        a.val.abs_diff(b.val)
+    } as usize;
+    let ds = (ds / 13).min(DSAT_BINS - 1); // 13/255 ≈ 0.05 per bin, the last ≥ 0.25
+    dh * DSAT_BINS + ds
+}
+
+/// Bin of a gradient magnitude on the 0–255 scale: 0, [2,4), [4,8), … [128, ∞).
+#[inline]
+pub fn gradient_bin(g: u32) -> usize {
+    if g < 2 {
+        0
+    } else {
+        ((32 - g.leading_zeros()) as usize - 1).min(GRADIENT_BINS - 1)
+    }
+}
+
+/// Bin of a temporal difference: [0,3), [3,6), [6,12), [12,24), [24,48), [48,96), [96, ∞).
+#[inline]
+pub fn temporal_bin(d: u32) -> usize {
+    match d {
+        0..=2 => 0,
+        3..=5 => 1,
+        6..=11 => 2,
+        12..=23 => 3,
+        24..=47 => 4,
+        48..=95 => 5,
+        _ => 6,
+    }
+}
+
+/// The features of one downscaled frame.
+#[derive(Clone, Debug, Default)]
+pub struct FrameFeatures {
+    pub width: usize,
+    pub height: usize,
+    pub colour: Vec<PixelColour>,
+    /// Joint bin of the horizontal and vertical gradient of the value channel.
+    pub gradient: Vec<u8>,
+    /// Gradient magnitude bin (max of the two axes), for the motion term.
+    pub gradient_magnitude: Vec<u8>,
+    /// Marker proximity bin, for the pattern term.
+    pub proximity: Vec<u8>,
+    distance: Vec<u16>,
+}
+
+/// Box-downscales `image` by `factor` (1 = copy) into `out` (RGB, row-major).
+pub fn downscale(image: &RgbImage, factor: u32, out: &mut Vec<[u8; 3]>) -> (usize, usize) {
+    let f = factor.max(1) as usize;
+    let (w, h) = (image.width() as usize / f, image.height() as usize / f);
+    out.clear();
+    out.reserve(w * h);
+    let raw = image.as_raw();
+    let stride = image.width() as usize * 3;
+    let area = (f * f) as u32;
+    for y in 0..h {
+        for x in 0..w {
+            let mut sum = [0u32; 3];
+            for dy in 0..f {
+                let row = (y * f + dy) * stride + x * f * 3;
+                for dx in 0..f {
+                    let p = row + dx * 3;
+                    sum[0] += raw[p] as u32;
+                    sum[1] += raw[p + 1] as u32;
+                    sum[2] += raw[p + 2] as u32;
+                }
+            }
+            out.push(sum.map(|s| ((s + area / 2) / area) as u8));
+        }
+    }
+    (w, h)
+}
+
+impl FrameFeatures {
+    /// Computes the features of a downscaled frame `rgb` of `width × height` into `self`.
+    pub fn compute(
+        &mut self,
+        rgb: &[[u8; 3]],
+        width: usize,
+        height: usize,
+        lut: &ColourLut,
+        gate: &MarkerGate,
+    ) {
+        self.width = width;
+        self.height = height;
+        self.colour.clear();
+        self.colour.extend(rgb.iter().map(|&p| lut.get(p)));
+        self.gradient.clear();
+        self.gradient_magnitude.clear();
+        self.gradient.resize(width * height, 0);
+        self.gradient_magnitude.resize(width * height, 0);
+        let val = |i: usize| self.colour[i].val as i32;
+        for y in 0..height {
+            for x in 0..width {
+                let i = y * width + x;
+                let gh = val(y * width + (x + 1).min(width - 1))
+                    .abs_diff(val(y * width + x.saturating_sub(1)));
+                let gv = val((y + 1).min(height - 1) * width + x)
+                    .abs_diff(val(y.saturating_sub(1) * width + x));
+                let (bh, bv) = (gradient_bin(gh), gradient_bin(gv));
+                self.gradient[i] = (bh * GRADIENT_BINS + bv) as u8;
+                self.gradient_magnitude[i] = bh.max(bv) as u8;
+            }
+        }
+        self.compute_proximity(gate);
+    }
+
+    /// Two-pass 3-4 chamfer distance (÷3 ≈ pixels) to the nearest marker-coloured pixel, binned.
+    fn compute_proximity(&mut self, gate: &MarkerGate) {
+        let (w, h) = (self.width, self.height);
+        const FAR: u16 = u16::MAX / 2;
+        self.distance.clear();
+        self.distance.extend(
+            self.colour
+                .iter()
+                .map(|&c| if gate.is_marker(c) { 0 } else { FAR }),
+        );
+        let d = &mut self.distance;
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                let mut v = d[i];
+                if x > 0 {
+                    v = v.min(d[i - 1] + 3);
+                }
+                if y > 0 {
+                    v = v.min(d[i - w] + 3);
+                    if x > 0 {
+                        v = v.min(d[i - w - 1] + 4);
+                    }
+                    if x + 1 < w {
+                        v = v.min(d[i - w + 1] + 4);
+                    }
+                }
+                d[i] = v;
+            }
+        }
+        for y in (0..h).rev() {
+            for x in (0..w).rev() {
+                let i = y * w + x;
+                let mut v = d[i];
+                if x + 1 < w {
+                    v = v.min(d[i + 1] + 3);
+                }
+                if y + 1 < h {
+                    v = v.min(d[i + w] + 3);
+                    if x + 1 < w {
+                        v = v.min(d[i + w + 1] + 4);
+                    }
+                    if x > 0 {
+                        v = v.min(d[i + w - 1] + 4);
+                    }
+                }
+                d[i] = v;
+            }
+        }
+        self.proximity.clear();
+        self.proximity
+            .extend(d.iter().map(|&v| proximity_bin((v as u32 + 1) / 3) as u8));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grey_and_dark_pixels_are_achromatic() {
+        let grey = classify(128, 128, 128);
+        assert!(!grey.chromatic);
+        assert!(grey.bin as usize >= HUE_BINS * SAT_BINS * VAL_BINS);
+        assert!(!classify(10, 0, 0).chromatic); // value 0.04
+        let green = classify(120, 180, 60);
+        assert!(green.chromatic && (green.bin as usize) < HUE_BINS * SAT_BINS * VAL_BINS);
+    }
+
+    #[test]
+    fn suit_hues_fall_in_different_bins() {
+        let bins: Vec<u16> = [
+            [204, 31, 31],
+            [38, 191, 191],
+            [100, 55, 158],
+            [123, 184, 64],
+        ]
+        .iter()
+        .map(|&[r, g, b]| classify(r, g, b).bin)
+        .collect();
+        for i in 0..4 {
+            for j in i + 1..4 {
+                assert_ne!(
+                    bins[i] as usize / (SAT_BINS * VAL_BINS),
+                    bins[j] as usize / (SAT_BINS * VAL_BINS)
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn lut_agrees_with_direct_classification_on_6_bit_colours() {
+        let lut = ColourLut::new();
+        for &(r, g, b) in &[
+            (0u8, 0u8, 0u8),
+            (255, 255, 255),
+            (252, 4, 128),
+            (100, 200, 40),
+        ] {
+            let up = |c: u8| (c & !3) | (c >> 6);
+            assert_eq!(lut.get([r, g, b]), classify(up(r), up(g), up(b)));
+        }
+    }
+
+    #[test]
+    fn contrast_bins() {
+        let a = classify(120, 180, 60);
+        assert_eq!(contrast_bin(a, a), 0);
+        let red = classify(204, 31, 31);
+        assert_eq!(contrast_bin(a, red) / DSAT_BINS, DHUE_BINS - 2); // far apart in hue
+        let grey = classify(128, 128, 128);
+        assert_eq!(contrast_bin(a, grey) / DSAT_BINS, DHUE_BINS - 1);
+    }
+
+    #[test]
+    fn gradient_and_temporal_bins() {
+        assert_eq!(
+            [0, 1, 2, 3, 4, 8, 127, 128, 255].map(gradient_bin),
+            [0, 0, 1, 1, 2, 3, 6, 7, 7]
+        );
+        assert_eq!(
+            [0, 2, 3, 6, 12, 24, 48, 96, 255].map(temporal_bin),
+            [0, 0, 1, 2, 3, 4, 5, 6, 6]
+        );
+    }
+
+    #[test]
+    fn proximity_counts_pixels_to_the_nearest_marker() {
+        let suit = crate::suit::SuitDefinition::load_dir(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"),
+        )
+        .expect("suit");
+        let gate = MarkerGate::new(&suit);
+        // A 6×1 row: a red marker pixel at x = 1, suit green elsewhere.
+        let mut rgb = vec![[123u8, 184, 64]; 6];
+        rgb[1] = [204, 31, 31];
+        let mut f = FrameFeatures::default();
+        f.compute(&rgb, 6, 1, &ColourLut::new(), &gate);
+        assert_eq!(f.proximity, vec![1, 0, 1, 2, 3, 4]);
+        assert!(!gate.is_marker(classify(123, 184, 64)));
+        assert!(gate.is_marker(classify(38, 191, 191)));
+    }
+
+    #[test]
+    fn downscale_averages_blocks() {
+        let mut img = RgbImage::new(4, 2);
+        img.put_pixel(0, 0, image::Rgb([100, 0, 0]));
+        img.put_pixel(1, 1, image::Rgb([200, 0, 0]));
+        let mut out = Vec::new();
+        assert_eq!(downscale(&img, 2, &mut out), (2, 1));
+        assert_eq!(out, vec![[75, 0, 0], [0, 0, 0]]);
+    }
+}
