@@ -10,7 +10,7 @@ bash scripts/setup.sh
 case "${1:-}" in
   demo)
     cargo build --release --workspace
-    ./target/release/suitcap-synth --bvh tests/data/mocap/cmu_10_03_kick_ball.bvh --frames 90 \
+    ./target/release/suitcap-synth --bvh tests/data/mocap/cmu_10_03_kick_ball.bvh --frames 75 \
       --size 640x480 --seed 1 --out out/synth --overwrite
     ./target/release/suitcap check --suit suits/default --data out/synth
     echo "frames: out/synth/frames/  masks: out/synth/masks/  ground truth: out/synth/motion.bvh, markers.csv"
