@@ -255,6 +255,9 @@ impl MarkerGrid {
         }
         let row = (along / self.pitch) as u32;
         let &(columns, circumference) = self.rows.get(row as usize)?;
+        if columns == 0 {
+            return None;
+        }
         if (along - (row as f32 + 0.5) * self.pitch).abs() > self.half_size {
             return None;
         }
@@ -304,26 +307,65 @@ impl BodyPart {
         self.radii_start.lerp(self.radii_end, t)
     }
 
-    /// Perimeter of the cross-section at `u`.
-    pub fn circumference_at(&self, u: f32) -> f32 {
-        let r = self.radii_at(u);
-        ellipse_arc_table(r.x, r.y)[4 * ARC_STEPS]
+    /// Lengths of the start and end caps along the bone.
+    pub fn cap_lengths(&self) -> (f32, f32) {
+        (
+            self.cap * self.radii_start.x.min(self.radii_start.y),
+            self.cap * self.radii_end.x.min(self.radii_end.y),
+        )
     }
 
-    /// Point and outward normal at `u` cm along the straight section and angle `theta` around it.
+    /// Scale of the cross-section at `u`: 1 on the straight section, √(1 − t²) at the fraction t of
+    /// the way along a half-ellipsoid cap, 0 beyond it.
+    pub fn section_scale(&self, u: f32) -> f32 {
+        let (cap_start, cap_end) = self.cap_lengths();
+        let length = self.length();
+        let t = if u < 0.0 {
+            -u / cap_start.max(1e-6)
+        } else if u > length {
+            (u - length) / cap_end.max(1e-6)
+        } else {
+            0.0
+        };
+        (1.0 - t.min(1.0).powi(2)).sqrt()
+    }
+
+    /// Perimeter of the cross-section at `u` (caps included).
+    pub fn circumference_at(&self, u: f32) -> f32 {
+        let r = self.radii_at(u);
+        ellipse_arc_table(r.x, r.y)[4 * ARC_STEPS] * self.section_scale(u)
+    }
+
+    /// Point and outward normal at `u` cm along the bone (negative or beyond the length: on a cap)
+    /// and angle `theta` around it.
     pub fn surface_point(&self, u: f32, theta: f32) -> (Vec3, Vec3) {
         let (e1, e2) = self.section_axes();
         let d = self.axis();
-        let r = self.radii_at(u);
         let length = self.length().max(1e-6);
-        let slope = (self.radii_end - self.radii_start) / length;
+        let clamped = u.clamp(0.0, length);
+        let r = self.radii_at(clamped);
         let (sin, cos) = theta.sin_cos();
-        let position = self.start + d * u + e1 * (r.x * cos) + e2 * (r.y * sin);
-        // Gradient of the implicit surface (x/a)² + (y/b)² = 1 with a, b tapering along d.
-        let normal = (e1 * (cos / r.x) + e2 * (sin / r.y)
-            - d * (slope.x * cos * cos / r.x + slope.y * sin * sin / r.y))
-            .normalize_or(e1);
-        (position, normal)
+        let radial = e1 * (r.x * cos) + e2 * (r.y * sin);
+        let axial = u - clamped;
+        if axial == 0.0 {
+            let slope = (self.radii_end - self.radii_start) / length;
+            // Gradient of the implicit surface (x/a)² + (y/b)² = 1 with a, b tapering along d.
+            let normal = (e1 * (cos / r.x) + e2 * (sin / r.y)
+                - d * (slope.x * cos * cos / r.x + slope.y * sin * sin / r.y))
+                .normalize_or(e1);
+            return (self.start + d * u + radial, normal);
+        }
+        // Half-ellipsoid cap: the section shrinks to the pole; the normal is the ellipsoid's gradient.
+        let (cap_start, cap_end) = self.cap_lengths();
+        let cap = if axial < 0.0 { cap_start } else { cap_end }.max(1e-3);
+        let t = (axial / cap).clamp(-1.0, 1.0);
+        let scale = (1.0 - t * t).sqrt();
+        let normal = (e1 * (scale * cos / r.x) + e2 * (scale * sin / r.y) + d * (t / cap))
+            .normalize_or(d * t.signum());
+        (
+            self.start + d * (clamped + t * cap) + radial * scale,
+            normal,
+        )
     }
 
     /// Angle at which the arc length from θ = 0 is the fraction `s` of the perimeter at `u`.
@@ -350,8 +392,7 @@ impl BodyPart {
         // Rings: (u along the bone, scale of the cross-section: 1 on the straight part, less on the caps).
         let mut rings: Vec<(f32, f32)> = Vec::new();
         const CAP_RINGS: usize = 5;
-        let cap_start = self.cap * self.radii_start.x.min(self.radii_start.y);
-        let cap_end = self.cap * self.radii_end.x.min(self.radii_end.y);
+        let (cap_start, cap_end) = self.cap_lengths();
         for k in 0..CAP_RINGS {
             let phi = (CAP_RINGS - k) as f32 / CAP_RINGS as f32 * std::f32::consts::FRAC_PI_2;
             rings.push((-cap_start * phi.sin(), phi.cos()));
@@ -366,26 +407,12 @@ impl BodyPart {
         }
 
         let mut vertices = Vec::with_capacity(rings.len() * (around + 1) + 2);
-        for &(u, scale) in &rings {
-            let clamped = u.clamp(0.0, length);
-            let r = self.radii_at(clamped);
+        for &(u, _) in &rings {
+            let r = self.radii_at(u);
             let table = ellipse_arc_table(r.x, r.y);
-            let on_cap = u < 0.0 || u > length;
             for k in 0..=around {
                 let theta = TAU * k as f32 / around as f32;
-                let (section_point, section_normal) = self.surface_point(clamped, theta);
-                let (position, normal) = if on_cap {
-                    // Half-ellipsoid cap: shrink the section toward the axis and bend the normal.
-                    let centre = self.start + d * clamped;
-                    let radial = section_point - centre;
-                    let axial = u - clamped;
-                    let cap_len = if u < 0.0 { cap_start } else { cap_end }.max(1e-3);
-                    let position = centre + radial * scale + d * axial;
-                    let normal = (section_normal * scale + d * (axial / cap_len)).normalize_or(d);
-                    (position, normal)
-                } else {
-                    (section_point, section_normal)
-                };
+                let (position, normal) = self.surface_point(u, theta);
                 let step = k * ARC_STEPS * 4 / around;
                 let s = table[step.min(4 * ARC_STEPS)] / table[4 * ARC_STEPS];
                 vertices.push(SurfaceVertex {
@@ -444,24 +471,23 @@ impl BodyPart {
         }
     }
 
-    /// The marker grid of this part for `suit`: rows along the straight section, each with its own
-    /// number of columns around. Empty for parts that are not suit cloth.
+    /// The marker grid of this part for `suit`: rows along the whole part, caps included, each with
+    /// as many columns as its perimeter holds (none close to a pole). Empty for parts that are not
+    /// suit cloth.
     pub fn marker_grid(&self, suit: &SuitDefinition) -> MarkerGrid {
         let pitch = suit.pitch_cm();
-        let length = self.length();
+        let (cap_start, cap_end) = self.cap_lengths();
+        let total = cap_start + self.length() + cap_end;
         let rows = if self.material == Material::Suit {
-            (length / pitch).floor() as u32
+            (total / pitch).floor() as u32
         } else {
             0
         };
-        let first_row_u = (length - rows as f32 * pitch) * 0.5;
+        let first_row_u = -cap_start + (total - rows as f32 * pitch) * 0.5;
         let rows = (0..rows)
             .map(|row| {
                 let circumference = self.circumference_at(first_row_u + (row as f32 + 0.5) * pitch);
-                (
-                    ((circumference / pitch).floor() as u32).max(1),
-                    circumference,
-                )
+                ((circumference / pitch).floor() as u32, circumference)
             })
             .collect();
         MarkerGrid {
@@ -781,17 +807,20 @@ mod tests {
     }
 
     #[test]
-    fn grid_of_a_30_cm_cylinder_has_four_rows_of_eight() {
-        // Pitch 7: 4 rows (28 cm) centred on 30 cm, first row centre at 1 + 3.5 = 4.5 cm.
-        // Perimeter 62.8 cm → 8 columns of 7.85 cm.
+    fn grid_of_a_capsule_covers_the_caps() {
+        // 30 cm straight + two 10 cm caps = 50 cm; pitch 7: 7 rows (49 cm) starting at u = −9.5,
+        // row centres −6, 1, 8, …, 36. The straight rows have a 62.8 cm perimeter → 8 columns; the
+        // first and last rows sit 6 cm into a cap, where the section is √(1 − 0.6²) = 0.8 as wide:
+        // 50.3 cm → 7 columns. 7 + 5·8 + 7 = 54 markers.
         let part = cylinder();
         let s = suit();
         let markers = part.markers(&s);
-        assert_eq!(markers.len(), 32);
-        assert_eq!(markers[0].centre_u, 4.5);
-        assert_eq!(markers[9].id, 2 * 10_000 + 100 + 1);
+        assert_eq!(markers.len(), 54);
+        assert!((markers[0].centre_u + 6.0).abs() < 1e-5);
+        assert!((markers[7].centre_u - 1.0).abs() < 1e-5);
+        assert_eq!(markers[7 + 8 + 1].id, 2 * 10_000 + 2 * 100 + 1);
         // A point at a marker's centre is on that marker; 3 cm along the bone is in the gap.
-        let m = markers[9];
+        let m = markers[7 + 8 + 1];
         assert_eq!(part.marker_at(&s, m.centre_u, m.centre_s), Some(m));
         assert_eq!(part.marker_at(&s, m.centre_u + 3.0, m.centre_s), None);
         assert_eq!(part.marker_at(&s, m.centre_u + 1.9, m.centre_s), Some(m));
@@ -801,7 +830,7 @@ mod tests {
     fn markers_are_four_centimetre_squares() {
         let part = cylinder();
         let s = suit();
-        let m = part.markers(&s)[5];
+        let m = part.markers(&s)[7 + 5]; // on the straight section
         let (corners, centre) = part.marker_corners(&s, &m);
         let side_along = corners[0].distance(corners[3]);
         let side_around = corners[0].distance(corners[1]);

@@ -62,6 +62,9 @@ enum Command {
         /// Ground-truth masks (same names) to report IoU against.
         #[arg(long)]
         truth: Option<PathBuf>,
+        /// Override the trained term weights σ_C,σ_N,σ_G,σ_M,σ_T (for experiments), e.g. 2,1,1,0,1.
+        #[arg(long, value_delimiter = ',')]
+        weights: Option<Vec<f32>>,
         /// Also write the graph of this frame index as GCG1 (to compare solvers).
         #[arg(long, requires = "graph_out")]
         dump_graph: Option<u64>,
@@ -200,10 +203,23 @@ fn segment(
     input: &str,
     out: &Path,
     truth: Option<&PathBuf>,
+    weights: Option<&[f32]>,
     dump: Option<(u64, &PathBuf)>,
 ) -> anyhow::Result<()> {
     let suit = SuitDefinition::load_dir(suit_dir)?;
-    let tables = SegmenterTables::load(suit_dir)?;
+    let mut tables = SegmenterTables::load(suit_dir)?;
+    if let Some(w) = weights {
+        let array: [f32; 5] = w.try_into().map_err(|_| {
+            anyhow::anyhow!(
+                "--weights takes 5 numbers (σ_C,σ_N,σ_G,σ_M,σ_T), got {}",
+                w.len()
+            )
+        })?;
+        if array.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
+            bail!("--weights: every weight must be a finite number >= 0");
+        }
+        tables.weights = suitcap::segment::Weights::from_array(array);
+    }
     let mut segmenter = Segmenter::new(tables, &suit, SegmenterOptions::default());
     let names: Option<Vec<String>> = if Path::new(input).is_dir() {
         let files = list_frame_files(Path::new(input))?;
@@ -333,6 +349,7 @@ fn main() -> ExitCode {
             input,
             out,
             truth,
+            weights,
             dump_graph,
             graph_out,
         } => segment(
@@ -340,6 +357,7 @@ fn main() -> ExitCode {
             input,
             out,
             truth.as_ref(),
+            weights.as_deref(),
             dump_graph.zip(graph_out.as_ref()),
         ),
     };

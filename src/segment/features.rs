@@ -34,9 +34,38 @@ pub const CONTRAST_BINS: usize = DHUE_BINS * DSAT_BINS;
 pub const GRADIENT_BINS: usize = 8;
 /// Temporal difference bins (0, 3, 6, 12, 24, 48, 96).
 pub const TEMPORAL_BINS: usize = 7;
-/// Marker proximity bins: chamfer distance (pixels at the cut's resolution) to the nearest pixel of a
-/// suit marker colour: 0, 1, 2, 3, 4–5, 6–7, 8–11, 12–15, 16 and more.
-pub const PROXIMITY_BINS: usize = 9;
+/// Pattern classes: how much of the other half of the suit's pattern surrounds a pixel. For a
+/// marker-coloured pixel, the share of cloth-coloured pixels in the window around it; for any other
+/// pixel, the share of marker-coloured pixels: 0, up to 6 %, up to 14 %, up to 25 %, more.
+pub const PATTERN_CLASSES: usize = 5;
+/// Half-width of the pattern window: a 60th of the cut's height, at least 4 pixels (a 9 × 9 window at
+/// 320 × 240). The person fills a similar share of the picture at any resolution, so the window
+/// spans a similar number of marker pitches.
+pub fn pattern_radius(height: usize) -> usize {
+    ((height as f32 / 60.0).round() as usize).max(4)
+}
+
+/// Pattern class of a share in [0, 1].
+#[inline]
+pub fn pattern_class(share: f32) -> u8 {
+    if share <= 0.0 {
+        0
+    } else if share <= 0.06 {
+        1
+    } else if share <= 0.14 {
+        2
+    } else if share <= 0.25 {
+        3
+    } else {
+        4
+    }
+}
+
+/// Index into the joint colour × pattern table.
+#[inline]
+pub fn colour_index(colour: PixelColour, pattern: u8) -> usize {
+    pattern as usize * COLOUR_BINS + colour.bin as usize
+}
 
 /// Which pixels have one of the suit's marker colours (hue within the suit's tolerance of a marker
 /// hue, saturation and value above its gates).
@@ -83,39 +112,6 @@ impl MarkerGate {
             && c.sat >= self.min_saturation
             && c.val >= self.min_value
             && self.cloth_hue[c.hue as usize]
-    }
-}
-
-/// Proximity classes the colour table is split by: within 1 pixel of a marker colour, 2–3, 4–7, 8+.
-pub const PROXIMITY_CLASSES: usize = 4;
-
-/// Proximity class of a proximity bin.
-#[inline]
-pub fn proximity_class(bin: u8) -> usize {
-    match bin {
-        0 | 1 => 0,
-        2 | 3 => 1,
-        4 | 5 => 2,
-        _ => 3,
-    }
-}
-
-/// Index into the joint colour × proximity table.
-#[inline]
-pub fn colour_index(colour: PixelColour, proximity_bin: u8) -> usize {
-    proximity_class(proximity_bin) * COLOUR_BINS + colour.bin as usize
-}
-
-/// Bin of a chamfer distance in pixels.
-#[inline]
-pub fn proximity_bin(d: u32) -> usize {
-    match d {
-        0..=3 => d as usize,
-        4..=5 => 4,
-        6..=7 => 5,
-        8..=11 => 6,
-        12..=15 => 7,
-        _ => 8,
     }
 }
 
@@ -241,9 +237,71 @@ pub struct FrameFeatures {
     pub gradient: Vec<u8>,
     /// Gradient magnitude bin (max of the two axes), for the motion term.
     pub gradient_magnitude: Vec<u8>,
-    /// Marker proximity bin, for the pattern term.
-    pub proximity: Vec<u8>,
-    distance: Vec<u16>,
+    /// Pattern class (see [`PATTERN_CLASSES`]), joint with the colour in the colour table.
+    pub pattern: Vec<u8>,
+    marker_sum: Vec<u32>,
+    cloth_sum: Vec<u32>,
+}
+
+/// Summed-area table of `values` (row-major `w × h`) into `sum`, `(w + 1) × (h + 1)` with a zero border.
+fn integral(sum: &mut Vec<u32>, w: usize, h: usize, values: impl Iterator<Item = bool>) {
+    sum.clear();
+    sum.resize((w + 1) * (h + 1), 0);
+    let stride = w + 1;
+    let mut values = values;
+    for y in 0..h {
+        let mut row = 0u32;
+        for x in 0..w {
+            row += values.next().unwrap_or(false) as u32;
+            sum[(y + 1) * stride + x + 1] = sum[y * stride + x + 1] + row;
+        }
+    }
+}
+
+/// "No seed pixel" in a chamfer distance map.
+pub const FAR: u16 = u16::MAX / 2;
+
+/// Two-pass 3-4 chamfer distance transform in place: seeds hold 0, other pixels [`FAR`]; the result
+/// is 3 × the distance in pixels (4 per diagonal step).
+pub fn chamfer(d: &mut [u16], w: usize, h: usize) {
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let mut v = d[i];
+            if x > 0 {
+                v = v.min(d[i - 1] + 3);
+            }
+            if y > 0 {
+                v = v.min(d[i - w] + 3);
+                if x > 0 {
+                    v = v.min(d[i - w - 1] + 4);
+                }
+                if x + 1 < w {
+                    v = v.min(d[i - w + 1] + 4);
+                }
+            }
+            d[i] = v;
+        }
+    }
+    for y in (0..h).rev() {
+        for x in (0..w).rev() {
+            let i = y * w + x;
+            let mut v = d[i];
+            if x + 1 < w {
+                v = v.min(d[i + 1] + 3);
+            }
+            if y + 1 < h {
+                v = v.min(d[i + w] + 3);
+                if x + 1 < w {
+                    v = v.min(d[i + w + 1] + 4);
+                }
+                if x > 0 {
+                    v = v.min(d[i + w - 1] + 4);
+                }
+            }
+            d[i] = v;
+        }
+    }
 }
 
 /// Box-downscales `image` by `factor` (1 = copy) into `out` (RGB, row-major).
@@ -304,61 +362,47 @@ impl FrameFeatures {
                 self.gradient_magnitude[i] = bh.max(bv) as u8;
             }
         }
-        self.compute_proximity(gate);
+        self.compute_pattern(gate);
     }
 
-    /// Two-pass 3-4 chamfer distance (÷3 ≈ pixels) to the nearest marker-coloured pixel, binned.
-    fn compute_proximity(&mut self, gate: &MarkerGate) {
+    /// The pattern class of every pixel from box sums (integral images) of the marker and cloth
+    /// indicators over a [`pattern_radius`] window. On the suit every pixel sees both halves of the
+    /// pattern; inside a red poster or a lawn, or a few pixels off the person, it does not.
+    fn compute_pattern(&mut self, gate: &MarkerGate) {
         let (w, h) = (self.width, self.height);
-        const FAR: u16 = u16::MAX / 2;
-        self.distance.clear();
-        self.distance.extend(
-            self.colour
-                .iter()
-                .map(|&c| if gate.is_marker(c) { 0 } else { FAR }),
+        integral(
+            &mut self.marker_sum,
+            w,
+            h,
+            self.colour.iter().map(|&c| gate.is_marker(c)),
         );
-        let d = &mut self.distance;
+        integral(
+            &mut self.cloth_sum,
+            w,
+            h,
+            self.colour.iter().map(|&c| gate.is_cloth(c)),
+        );
+        self.pattern.clear();
+        let r = pattern_radius(h);
+        let stride = w + 1;
         for y in 0..h {
+            let (y0, y1) = (y.saturating_sub(r), (y + r + 1).min(h));
             for x in 0..w {
-                let i = y * w + x;
-                let mut v = d[i];
-                if x > 0 {
-                    v = v.min(d[i - 1] + 3);
-                }
-                if y > 0 {
-                    v = v.min(d[i - w] + 3);
-                    if x > 0 {
-                        v = v.min(d[i - w - 1] + 4);
-                    }
-                    if x + 1 < w {
-                        v = v.min(d[i - w + 1] + 4);
-                    }
-                }
-                d[i] = v;
+                let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(w));
+                let boxed = |sum: &[u32]| {
+                    sum[y1 * stride + x1] + sum[y0 * stride + x0]
+                        - sum[y0 * stride + x1]
+                        - sum[y1 * stride + x0]
+                };
+                let area = ((y1 - y0) * (x1 - x0)) as f32;
+                let other = if gate.is_marker(self.colour[y * w + x]) {
+                    boxed(&self.cloth_sum)
+                } else {
+                    boxed(&self.marker_sum)
+                };
+                self.pattern.push(pattern_class(other as f32 / area));
             }
         }
-        for y in (0..h).rev() {
-            for x in (0..w).rev() {
-                let i = y * w + x;
-                let mut v = d[i];
-                if x + 1 < w {
-                    v = v.min(d[i + 1] + 3);
-                }
-                if y + 1 < h {
-                    v = v.min(d[i + w] + 3);
-                    if x + 1 < w {
-                        v = v.min(d[i + w + 1] + 4);
-                    }
-                    if x > 0 {
-                        v = v.min(d[i + w - 1] + 4);
-                    }
-                }
-                d[i] = v;
-            }
-        }
-        self.proximity.clear();
-        self.proximity
-            .extend(d.iter().map(|&v| proximity_bin((v as u32 + 1) / 3) as u8));
     }
 }
 
@@ -434,19 +478,26 @@ mod tests {
     }
 
     #[test]
-    fn proximity_counts_pixels_to_the_nearest_marker() {
+    fn pattern_class_counts_the_other_half_of_the_pattern() {
         let suit = crate::suit::SuitDefinition::load_dir(
             &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"),
         )
         .expect("suit");
         let gate = MarkerGate::new(&suit);
-        // A 6×1 row: a red marker pixel at x = 1, suit green elsewhere.
-        let mut rgb = vec![[123u8, 184, 64]; 6];
-        rgb[1] = [204, 31, 31];
+        let (red, green, grey) = ([204u8, 31, 31], [123u8, 184, 64], [128u8, 128, 128]);
+        // A 12×1 row: green, one red marker at x = 1, green to x = 5, grey after.
+        let mut rgb = vec![green; 12];
+        rgb[1] = red;
+        for p in rgb.iter_mut().skip(6) {
+            *p = grey;
+        }
         let mut f = FrameFeatures::default();
-        f.compute(&rgb, 6, 1, &ColourLut::new(), &gate);
-        assert_eq!(f.proximity, vec![1, 0, 1, 2, 3, 4]);
-        assert!(!gate.is_marker(classify(123, 184, 64)));
+        f.compute(&rgb, 12, 1, &ColourLut::new(), &gate);
+        // Window x−4..=x+4 clipped to the row. x = 0: 1 marker in 5 pixels (20 %) → class 3. The
+        // marker (x = 1) sees 5 cloth pixels of 6 → class 4. x = 5: 1 of 9 (11 %) → class 2.
+        // x = 6 (grey) no longer sees the marker (its window starts at 2) → class 0.
+        assert_eq!(f.pattern, vec![3, 4, 3, 2, 2, 2, 0, 0, 0, 0, 0, 0]);
+        assert!(!gate.is_marker(classify(123, 184, 64)) && gate.is_cloth(classify(123, 184, 64)));
         assert!(gate.is_marker(classify(38, 191, 191)));
     }
 

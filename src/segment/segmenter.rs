@@ -8,6 +8,11 @@
 //!    axial edges (a label-pair energy A, B, D becomes an edge weight (2B − A − D)/2 plus (D − A)/2 on
 //!    both nodes' person cost);
 //! 3. cuts it with [`GridMaxFlow`] (the search buffers are reused from frame to frame);
+//!    the background's colour likelihood mixes the trained table with a background colour histogram
+//!    learned online from this stream's own confident background pixels (more than
+//!    [`SegmenterOptions::adapt_margin`] pixels from the person, decaying by
+//!    [`SegmenterOptions::adapt_rate`] per frame), as bilayer segmenters do: the 20 training frames
+//!    cannot show the room the suit will be used in, the stream itself does after one frame;
 //! 4. keeps the connected region that carries the most suit cloth next to markers, fills its small holes
 //!    ([`cleanup`](super::cleanup)), and reports what that changed;
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
@@ -21,8 +26,8 @@ use image::RgbImage;
 
 use super::cleanup::{fill_holes, keep_person_region, CleanupReport};
 use super::features::{
-    colour_index, contrast_bin, downscale, temporal_bin, ColourLut, FrameFeatures, MarkerGate,
-    TEMPORAL_BINS,
+    chamfer, colour_index, contrast_bin, downscale, temporal_bin, ColourLut, FrameFeatures,
+    MarkerGate, COLOUR_BINS, FAR, PATTERN_CLASSES, TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
 use super::tables::SegmenterTables;
@@ -38,6 +43,12 @@ pub struct SegmenterOptions {
     pub max_hole_fraction: f32,
     /// Weight of the upsampled cut against the full-resolution colour in the boundary band (nats).
     pub refine_prior: f32,
+    /// Share of the online background histogram that each new frame replaces (0 = no adaptation).
+    pub adapt_rate: f32,
+    /// Background pixels closer than this to the person (at the cut's resolution) are not learned.
+    pub adapt_margin: u32,
+    /// Weight of the online histogram in the background colour likelihood once it exists.
+    pub adapt_share: f32,
 }
 
 impl Default for SegmenterOptions {
@@ -46,6 +57,9 @@ impl Default for SegmenterOptions {
             min_person_fraction: 0.002,
             max_hole_fraction: 0.001,
             refine_prior: 3.0,
+            adapt_rate: 0.3,
+            adapt_margin: 4,
+            adapt_share: 0.7,
         }
     }
 }
@@ -94,6 +108,13 @@ pub struct Segmenter {
     before_previous_mask: Option<Vec<bool>>,
     ids: Vec<u32>,
     unary: Vec<[f32; 2]>,
+    /// Online background colour histogram over colour bins (sums to 1 once it exists).
+    online_background: Option<Vec<f32>>,
+    /// Background colour NLL per joint colour × pattern index used for the current frame.
+    background_colour: Vec<f32>,
+    /// p(pattern class | background) of the trained table.
+    background_pattern: [f32; PATTERN_CLASSES],
+    distance: Vec<u16>,
 }
 
 impl Segmenter {
@@ -119,6 +140,13 @@ impl Segmenter {
             edge_weight.push(sigma * (0.5 * (2.0 * b - a - d)).max(0.0));
             edge_adjust.push(sigma * 0.5 * (d - a));
         }
+        let background_pattern = std::array::from_fn(|class| {
+            tables.colour[0][class * COLOUR_BINS..(class + 1) * COLOUR_BINS]
+                .iter()
+                .map(|nll| (-nll).exp())
+                .sum::<f32>()
+        });
+        let background_colour = tables.colour[0].clone();
         Segmenter {
             tables,
             options,
@@ -135,6 +163,10 @@ impl Segmenter {
             before_previous_mask: None,
             ids: Vec::new(),
             unary: Vec::new(),
+            online_background: None,
+            background_colour,
+            background_pattern,
+            distance: Vec::new(),
         }
     }
 
@@ -142,11 +174,60 @@ impl Segmenter {
         &self.tables
     }
 
-    /// Forgets the history (a new sequence, or the camera moved).
+    /// Forgets the history and the learned background (a new sequence, or the camera moved).
     pub fn reset(&mut self) {
         self.previous = None;
         self.previous_mask = None;
         self.before_previous_mask = None;
+        self.online_background = None;
+        self.background_colour.clone_from(&self.tables.colour[0]);
+    }
+
+    /// Learns the background colours of this frame from pixels well away from the person and
+    /// refreshes the background colour likelihood for the next frame.
+    fn adapt_background(&mut self, labels: &[bool]) {
+        let o = self.options;
+        if o.adapt_rate <= 0.0 {
+            return;
+        }
+        let (w, h) = (self.features.width, self.features.height);
+        self.distance.clear();
+        self.distance
+            .extend(labels.iter().map(|&l| if l { 0 } else { FAR }));
+        chamfer(&mut self.distance, w, h);
+        let mut histogram = vec![0.0f32; COLOUR_BINS];
+        let mut total = 0.0f32;
+        for (i, &d) in self.distance.iter().enumerate() {
+            if d as u32 > 3 * o.adapt_margin {
+                histogram[self.features.colour[i].bin as usize] += 1.0;
+                total += 1.0;
+            }
+        }
+        if total < 1.0 {
+            return;
+        }
+        histogram.iter_mut().for_each(|v| *v /= total);
+        let online = match self.online_background.take() {
+            Some(mut old) => {
+                for (o_v, n) in old.iter_mut().zip(&histogram) {
+                    *o_v = (1.0 - o.adapt_rate) * *o_v + o.adapt_rate * n;
+                }
+                old
+            }
+            None => histogram,
+        };
+        // p_bg(colour, pattern) = (1 − s)·trained + s·online(colour)·p_trained(pattern | bg).
+        let share = o.adapt_share;
+        for class in 0..PATTERN_CLASSES {
+            for bin in 0..COLOUR_BINS {
+                let k = class * COLOUR_BINS + bin;
+                let trained = (-self.tables.colour[0][k]).exp();
+                let p =
+                    (1.0 - share) * trained + share * online[bin] * self.background_pattern[class];
+                self.background_colour[k] = -(p.max(1e-6)).ln();
+            }
+        }
+        self.online_background = Some(online);
     }
 
     /// Builds the frame's graph (without cutting it); the graph is then available from [`Segmenter::graph`].
@@ -176,7 +257,7 @@ impl Segmenter {
         let history = self.previous.as_ref().zip(self.previous_mask.as_ref());
         for i in 0..w * h {
             let c = f.colour[i];
-            let colour = colour_index(c, f.proximity[i]);
+            let colour = colour_index(c, f.pattern[i]);
             let mut u = [0usize, 1].map(|l| {
                 s.colour * t.colour[l][colour] + s.gradient * t.gradient[l][f.gradient[i] as usize]
             });
@@ -255,7 +336,7 @@ impl Segmenter {
 
         let started = Instant::now();
         let n = (w * h) as f32;
-        let (colours, proximity) = (&self.features.colour, &self.features.proximity);
+        let (colours, pattern) = (&self.features.colour, &self.features.pattern);
         let mut ids = std::mem::take(&mut self.ids);
         let mut report = keep_person_region(
             &mut labels,
@@ -264,7 +345,7 @@ impl Segmenter {
             // Suit cloth next to a marker: what only the suit looks like (a red poster is all marker
             // colour, a lawn all cloth colour, neither has the two interleaved).
             |i| {
-                if proximity[i] <= 3 && self.gate.is_cloth(colours[i]) {
+                if pattern[i] >= 3 && self.gate.is_cloth(colours[i]) {
                     1.0
                 } else {
                     0.01
@@ -289,6 +370,7 @@ impl Segmenter {
         times.refine = ms(started);
 
         // History for the next frame.
+        self.adapt_background(&labels);
         self.before_previous_mask = self.previous_mask.take();
         self.previous_mask = Some(labels);
         std::mem::swap(
@@ -303,9 +385,9 @@ impl Segmenter {
         }
     }
 
-    /// Proximity bin of low-resolution pixel `i` of the frame being refined.
-    fn previous_proximity(&self, i: usize) -> u8 {
-        self.features.proximity.get(i).copied().unwrap_or(u8::MAX)
+    /// Pattern class of low-resolution pixel `i` of the frame being refined.
+    fn pattern_at(&self, i: usize) -> u8 {
+        self.features.pattern.get(i).copied().unwrap_or(u8::MAX)
     }
 
     /// Upsamples the low-resolution labels to the frame; pixels whose bilinear neighbourhood is mixed
@@ -320,32 +402,56 @@ impl Segmenter {
         let sigma = self.tables.weights.colour;
         let prior = self.options.refine_prior;
         let raw = frame.as_raw();
+        let fw_us = fw as usize;
+        // Output columns grouped by the low-resolution column pair they interpolate between.
+        let column = |x: usize| ((x as f32 + 0.5) / f - 0.5).clamp(0.0, (w - 1) as f32);
         for y in 0..fh as usize {
             let sy = ((y as f32 + 0.5) / f - 0.5).clamp(0.0, (h - 1) as f32);
             let (y0, ty) = (sy as usize, sy.fract());
             let y1 = (y0 + 1).min(h - 1);
-            for x in 0..fw as usize {
-                let sx = ((x as f32 + 0.5) / f - 0.5).clamp(0.0, (w - 1) as f32);
-                let (x0, tx) = (sx as usize, sx.fract());
+            let row = &mut out[y * fw_us..(y + 1) * fw_us];
+            let mut x = 0;
+            while x < fw_us {
+                let x0 = column(x) as usize;
                 let x1 = (x0 + 1).min(w - 1);
-                let l = |xx: usize, yy: usize| labels[yy * w + xx] as u8 as f32;
-                let m = (l(x0, y0) * (1.0 - tx) + l(x1, y0) * tx) * (1.0 - ty)
-                    + (l(x0, y1) * (1.0 - tx) + l(x1, y1) * tx) * ty;
-                let i = y * fw as usize + x;
-                out[i] = if m <= 0.0 {
-                    false
-                } else if m >= 1.0 {
-                    true
-                } else {
-                    let p = i * 3;
-                    let c = self.lut.get([raw[p], raw[p + 1], raw[p + 2]]);
-                    let near =
-                        (sx.round() as usize).min(w - 1) + (sy.round() as usize).min(h - 1) * w;
-                    let k = colour_index(c, self.previous_proximity(near));
-                    let e_fg = sigma * self.tables.colour[1][k] + prior * (1.0 - m);
-                    let e_bg = sigma * self.tables.colour[0][k] + prior * m;
-                    e_fg < e_bg
-                };
+                // The run of output pixels that share the cell (x0, x0 + 1).
+                let mut end = x + 1;
+                while end < fw_us && column(end) as usize == x0 {
+                    end += 1;
+                }
+                let corners = [
+                    labels[y0 * w + x0],
+                    labels[y0 * w + x1],
+                    labels[y1 * w + x0],
+                    labels[y1 * w + x1],
+                ];
+                if corners.iter().all(|&c| c == corners[0]) {
+                    row[x..end].fill(corners[0]);
+                    x = end;
+                    continue;
+                }
+                for (xx, value) in row.iter_mut().enumerate().take(end).skip(x) {
+                    let sx = column(xx);
+                    let tx = sx - x0 as f32;
+                    let l = |c: bool| c as u8 as f32;
+                    let m = (l(corners[0]) * (1.0 - tx) + l(corners[1]) * tx) * (1.0 - ty)
+                        + (l(corners[2]) * (1.0 - tx) + l(corners[3]) * tx) * ty;
+                    *value = if m <= 0.0 {
+                        false
+                    } else if m >= 1.0 {
+                        true
+                    } else {
+                        let p = (y * fw_us + xx) * 3;
+                        let c = self.lut.get([raw[p], raw[p + 1], raw[p + 2]]);
+                        let near =
+                            (sx.round() as usize).min(w - 1) + (sy.round() as usize).min(h - 1) * w;
+                        let k = colour_index(c, self.pattern_at(near));
+                        let e_fg = sigma * self.tables.colour[1][k] + prior * (1.0 - m);
+                        let e_bg = sigma * self.background_colour[k] + prior * m;
+                        e_fg < e_bg
+                    };
+                }
+                x = end;
             }
         }
         Mask::from_pixels(fw, fh, out).unwrap_or_else(|| Mask::empty(fw, fh))

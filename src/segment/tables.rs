@@ -2,11 +2,12 @@
 //!
 //! Five likelihood tables, learned by counting over training frames with masks and stored as negative
 //! log-likelihoods:
-//! 1. colour C: p(colour bin, marker proximity | label), smoothed along hue (circularly), saturation
-//!    and value, mixed with a uniform share, with a floor. The marker proximity (not in the paper) is
-//!    the distance to the nearest pixel of a marker colour in four classes: every point of the suit
-//!    lies within about 2 cm of a marker, a lawn or a poster of the cloth's colour does not, so the
-//!    joint table tells the suit from backgrounds that share its cloth's hue;
+//! 1. colour C: p(colour bin, pattern class | label), smoothed along hue (circularly), saturation
+//!    and value, mixed with a uniform share, with a floor. The pattern class (not in the paper) is the
+//!    share of the other half of the suit's pattern around the pixel (markers around cloth, cloth
+//!    around a marker, see `features::PATTERN_CLASSES`): on the suit both halves are interleaved every
+//!    7 cm, on a lawn or a poster of the cloth's colour or a red object they are not, so the joint
+//!    table tells the suit from backgrounds that share one of its colours;
 //! 2. neighbourhood N: p(contrast bin | label pair) for BG→BG, BG→FG, FG→BG, FG→FG, counted over the
 //!    eight neighbours of the 3×3 neighbourhood (the cut itself uses the four axial ones);
 //! 3. gradient G: p(horizontal, vertical gradient bin | label);
@@ -22,18 +23,18 @@ use std::path::Path;
 
 use super::features::{
     colour_index, contrast_bin, FrameFeatures, COLOUR_BINS, CONTRAST_BINS, GRADIENT_BINS,
-    GREY_BINS, HUE_BINS, PROXIMITY_CLASSES, SAT_BINS, TEMPORAL_BINS, VAL_BINS,
+    GREY_BINS, HUE_BINS, PATTERN_CLASSES, SAT_BINS, TEMPORAL_BINS, VAL_BINS,
 };
 use crate::model::{ModelError, ModelFile};
 
 pub const SEGMENTER_KIND: &str = "segmenter";
 /// Version of the segmenter model file; bump when the features or tables change.
-pub const SEGMENTER_VERSION: u32 = 3;
+pub const SEGMENTER_VERSION: u32 = 5;
 /// Model file name inside a suit directory.
 pub const SEGMENTER_FILE: &str = "segmenter.bin";
 
-/// Entries of the joint colour × proximity table.
-pub const COLOUR_TABLE: usize = COLOUR_BINS * PROXIMITY_CLASSES;
+/// Entries of the joint colour × pattern table.
+pub const COLOUR_TABLE: usize = COLOUR_BINS * PATTERN_CLASSES;
 
 /// Smallest probability a table holds.
 const FLOOR: f32 = 1e-5;
@@ -84,7 +85,7 @@ impl Weights {
 pub struct SegmenterTables {
     /// The cut runs on frames box-downscaled by this factor.
     pub downscale: u32,
-    /// `[label][proximity class · COLOUR_BINS + colour bin]` (see `features::colour_index`).
+    /// `[label][pattern class · COLOUR_BINS + colour bin]` (see `features::colour_index`).
     pub colour: [Vec<f32>; 2],
     /// `−ln p(label)`.
     pub prior: [f32; 2],
@@ -212,7 +213,7 @@ impl TableCounts {
         for i in 0..w * h {
             let l = mask[i] as usize;
             self.labels[l] += 1.0;
-            self.colour[l][colour_index(features.colour[i], features.proximity[i])] += 1.0;
+            self.colour[l][colour_index(features.colour[i], features.pattern[i])] += 1.0;
             self.gradient[l][features.gradient[i] as usize] += 1.0;
         }
         // Neighbour pairs over the 3×3 neighbourhood (each unordered pair once, both orders counted).
@@ -407,8 +408,8 @@ mod tests {
         // FG→FG pairs inside the 2×2 square: 4 axial + 2 diagonal = 6 unordered.
         assert_eq!(counts.neighbourhood[3].iter().sum::<f64>(), 12.0);
         let tables = counts.finish(1, Weights::default());
-        let green = colour_index(f.colour[5], f.proximity[5]);
-        let grey = colour_index(f.colour[0], f.proximity[0]);
+        let green = colour_index(f.colour[5], f.pattern[5]);
+        let grey = colour_index(f.colour[0], f.pattern[0]);
         assert!(tables.colour[1][green] < tables.colour[0][green]);
         assert!(tables.colour[0][grey] < tables.colour[1][grey]);
     }
