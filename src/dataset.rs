@@ -6,7 +6,8 @@
 //!   masks/000000.png …    ground-truth person masks (8-bit grey, 255 = person, 0 = not)
 //!   motion.bvh            ground-truth pose, one BVH frame per image frame, at the video's rate
 //!   camera.toml           intrinsics and extrinsics in the mocap's world frame (see `camera`)
-//!   markers.csv           per frame, every visible suit marker: id, colour, projected centre, visible fraction
+//!   markers.csv           per frame, every visible suit marker: id, colour, projected centre, visible
+//!                         fraction and visible pixels
 //!   manifest.toml         everything needed to reproduce the dataset; written last
 //! ```
 //!
@@ -114,10 +115,12 @@ pub struct MarkerRecord {
     pub y: f32,
     /// Fraction of the marker's projected area that is visible, in [0, 1].
     pub visible_fraction: f32,
+    /// Visible area in pixels (a marker seen edge-on can be wholly visible and one pixel large).
+    pub visible_px: u32,
 }
 
 /// The header line of `markers.csv`.
-pub const MARKERS_HEADER: &str = "frame,marker_id,colour,x,y,visible_fraction";
+pub const MARKERS_HEADER: &str = "frame,marker_id,colour,x,y,visible_fraction,visible_px";
 
 /// A dataset that cannot be used; names the file and what is wrong.
 #[derive(Debug, thiserror::Error)]
@@ -207,8 +210,8 @@ pub fn markers_to_csv(records: &[MarkerRecord]) -> String {
     out.push('\n');
     for r in records {
         out.push_str(&format!(
-            "{},{},{},{:.3},{:.3},{:.3}\n",
-            r.frame, r.marker_id, r.colour, r.x, r.y, r.visible_fraction
+            "{},{},{},{:.3},{:.3},{:.3},{}\n",
+            r.frame, r.marker_id, r.colour, r.x, r.y, r.visible_fraction, r.visible_px
         ));
     }
     out
@@ -238,8 +241,8 @@ pub fn markers_from_csv(text: &str, path: &Path) -> Result<Vec<MarkerRecord>, Da
             continue;
         }
         let fields: Vec<&str> = line.split(',').collect();
-        if fields.len() != 6 {
-            return Err(error(i + 1, format!("{} fields, expected 6", fields.len())));
+        if fields.len() != 7 {
+            return Err(error(i + 1, format!("{} fields, expected 7", fields.len())));
         }
         fn field<T: std::str::FromStr>(value: &str, name: &str) -> Result<T, String> {
             value
@@ -255,6 +258,7 @@ pub fn markers_from_csv(text: &str, path: &Path) -> Result<Vec<MarkerRecord>, Da
                 x: field(fields[3], "x")?,
                 y: field(fields[4], "y")?,
                 visible_fraction: field(fields[5], "visible_fraction")?,
+                visible_px: field(fields[6], "visible_px")?,
             };
             if !(record.x.is_finite() && record.y.is_finite()) {
                 return Err("field x/y: not finite".into());
@@ -362,6 +366,7 @@ mod tests {
                 x: 12.5,
                 y: 7.25,
                 visible_fraction: 1.0,
+                visible_px: 52,
             },
             MarkerRecord {
                 frame: 3,
@@ -370,6 +375,7 @@ mod tests {
                 x: 0.0,
                 y: 479.5,
                 visible_fraction: 0.375,
+                visible_px: 3,
             },
         ];
         let text = markers_to_csv(&records);
@@ -382,7 +388,7 @@ mod tests {
 
     #[test]
     fn bad_markers_csv_names_line_and_field() {
-        let text = format!("{MARKERS_HEADER}\n0,1,red,1,2,0.5\n1,2,cyan,abc,2,0.5\n");
+        let text = format!("{MARKERS_HEADER}\n0,1,red,1,2,0.5,9\n1,2,cyan,abc,2,0.5,9\n");
         let err = markers_from_csv(&text, Path::new("m.csv"))
             .unwrap_err()
             .to_string();
@@ -394,7 +400,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("header"), "{err}");
-        let text = format!("{MARKERS_HEADER}\n0,1,red,1,2,1.5\n");
+        let text = format!("{MARKERS_HEADER}\n0,1,red,1,2,1.5,9\n");
         assert!(markers_from_csv(&text, Path::new("m.csv")).is_err());
     }
 

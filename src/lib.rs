@@ -19,6 +19,7 @@ pub mod bvh;
 pub mod camera;
 pub mod colour;
 pub mod dataset;
+pub mod descriptor;
 pub mod io;
 pub mod mask;
 pub mod model;

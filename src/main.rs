@@ -71,6 +71,29 @@ enum Command {
         #[arg(long)]
         graph_out: Option<PathBuf>,
     },
+    /// Compute the frame descriptor (Feature Context + HOG + box, or a variant) of every frame:
+    /// one CSV row per frame; optionally the detected markers, and their recall and precision
+    /// against a generated dataset's markers.csv.
+    Describe {
+        #[arg(long, default_value = "suits/default")]
+        suit: PathBuf,
+        /// A directory of frames or a .y4m file.
+        #[arg(long)]
+        input: String,
+        /// Person masks (same names as the frames); without it the suit's segmenter runs.
+        #[arg(long)]
+        masks: Option<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long)]
+        markers_out: Option<PathBuf>,
+        /// fc, hog, fc+hog, full (= fc+hog+box, 304 values) or silhouette.
+        #[arg(long, default_value = "full")]
+        descriptor: String,
+        /// A generator's markers.csv to score the detected markers against.
+        #[arg(long)]
+        truth_markers: Option<PathBuf>,
+    },
     /// Validate a suit directory (suit.toml) and, optionally, a dataset against it.
     Check {
         #[arg(long, default_value = "suits/default")]
@@ -333,6 +356,160 @@ fn segment(
     Ok(())
 }
 
+fn describe(
+    suit_dir: &Path,
+    input: &str,
+    masks: Option<&PathBuf>,
+    out: &Path,
+    markers_out: Option<&PathBuf>,
+    descriptor: &str,
+    truth_markers: Option<&PathBuf>,
+) -> anyhow::Result<()> {
+    use suitcap::descriptor::markers::{score_markers, MarkerScore, TruthMarker};
+    use suitcap::descriptor::{Codebooks, Describer, DescriptorKind};
+    let kind = DescriptorKind::parse(descriptor).with_context(|| {
+        format!("--descriptor '{descriptor}': expected fc, hog, fc+hog, full or silhouette")
+    })?;
+    let suit = SuitDefinition::load_dir(suit_dir)?;
+    let codebooks = Codebooks::load(suit_dir)?;
+    let mut segmenter = match masks {
+        Some(_) => None,
+        None => Some(Segmenter::new(
+            SegmenterTables::load(suit_dir)?,
+            &suit,
+            SegmenterOptions::default(),
+        )),
+    };
+    let truth = match truth_markers {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            Some(suitcap::dataset::markers_from_csv(&text, path)?)
+        }
+        None => None,
+    };
+    let names: Option<Vec<String>> = if Path::new(input).is_dir() {
+        let files = list_frame_files(Path::new(input))?;
+        Some(
+            files
+                .iter()
+                .map(|f| {
+                    format!(
+                        "{}.png",
+                        f.file_stem()
+                            .map(|s| s.to_string_lossy())
+                            .unwrap_or_default()
+                    )
+                })
+                .collect(),
+        )
+    } else {
+        None
+    };
+    let mut source = open_source(input, &SourceOptions::default())?;
+    let mut describer = Describer::new(&suit);
+    let mut rows = String::new();
+    rows.push_str("frame,person");
+    for k in 0..kind.len() {
+        rows.push_str(&format!(",d{k}"));
+    }
+    rows.push('\n');
+    let mut marker_rows = String::from("frame,colour,x,y,area\n");
+    let (mut frames, mut times, mut score, mut counts) =
+        (0usize, Vec::new(), MarkerScore::default(), Vec::new());
+    loop {
+        let frame = match source.next_frame() {
+            Ok(Some(frame)) => frame,
+            Ok(None) => break,
+            Err(e @ (SourceError::CorruptFrame { .. } | SourceError::SizeMismatch { .. })) => {
+                eprintln!("skipped: {e}");
+                continue;
+            }
+            Err(e) => {
+                eprintln!("stopped after {frames} frames: {e}");
+                break;
+            }
+        };
+        let name = names
+            .as_ref()
+            .and_then(|n| n.get(frame.index as usize).cloned())
+            .unwrap_or_else(|| format!("{:06}.png", frame.index));
+        let mask = match (masks, segmenter.as_mut()) {
+            (Some(dir), _) => {
+                let path = dir.join(&name);
+                Mask::from_gray(
+                    &image::open(&path)
+                        .with_context(|| format!("cannot read mask {}", path.display()))?
+                        .to_luma8(),
+                )
+            }
+            (None, Some(segmenter)) => segmenter.segment(&frame.image).mask,
+            (None, None) => bail!("no masks and no segmenter"),
+        };
+        let started = std::time::Instant::now();
+        let (d, markers) = describer.describe(&frame.image, &mask, kind, &codebooks);
+        times.push(started.elapsed().as_secs_f64() * 1e3);
+        counts.push(markers.len());
+        rows.push_str(&format!("{},{}", frame.index, d.person as u8));
+        for v in &d.values {
+            rows.push_str(&format!(",{v:.6}"));
+        }
+        rows.push('\n');
+        for m in &markers {
+            let colour = suit
+                .markers
+                .get(m.colour)
+                .map(|c| c.name.as_str())
+                .unwrap_or("?");
+            marker_rows.push_str(&format!(
+                "{},{colour},{:.3},{:.3},{}\n",
+                frame.index, m.centre.x, m.centre.y, m.area
+            ));
+        }
+        if let Some(truth) = &truth {
+            let expected: Vec<TruthMarker> = truth
+                .iter()
+                .filter(|t| t.frame as u64 == frame.index)
+                .filter_map(|t| {
+                    let colour = suit.markers.iter().position(|c| c.name == t.colour)?;
+                    Some(TruthMarker {
+                        centre: glam::Vec2::new(t.x, t.y),
+                        colour,
+                        visible_fraction: t.visible_fraction,
+                        visible_px: t.visible_px,
+                    })
+                })
+                .collect();
+            let side = (expected.iter().map(|t| t.visible_px).max().unwrap_or(16) as f32).sqrt();
+            score.add(score_markers(
+                &markers,
+                &expected,
+                0.6,
+                6,
+                (0.6 * side).max(2.0),
+            ));
+        }
+        frames += 1;
+    }
+    suitcap::io::write_atomic(out, rows.as_bytes())
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    if let Some(path) = markers_out {
+        suitcap::io::write_atomic(path, marker_rows.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    times.sort_by(f64::total_cmp);
+    let median = times.get(times.len() / 2).copied().unwrap_or(0.0);
+    let mean_markers = counts.iter().sum::<usize>() as f64 / counts.len().max(1) as f64;
+    println!("{frames} {} descriptors ({} values) written to {}; median {median:.2} ms per frame, {mean_markers:.0} markers per frame", kind.name(), kind.len(), out.display());
+    if truth.is_some() {
+        println!(
+            "markers vs truth (≥ 60 % and ≥ 6 px visible): recall {:.4} ({} of {}), precision {:.4} ({} of {} detections)",
+            score.recall(), score.found, score.truth, score.precision(), score.correct, score.detections
+        );
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -344,6 +521,23 @@ fn main() -> ExitCode {
             fps,
         } => capture(input, out, *frames, *size, *fps),
         Command::Check { suit, data } => check(suit, data.as_ref()),
+        Command::Describe {
+            suit,
+            input,
+            masks,
+            out,
+            markers_out,
+            descriptor,
+            truth_markers,
+        } => describe(
+            suit,
+            input,
+            masks.as_ref(),
+            out,
+            markers_out.as_ref(),
+            descriptor,
+            truth_markers.as_ref(),
+        ),
         Command::Segment {
             suit,
             input,

@@ -92,6 +92,8 @@ pub struct VisibleMarker {
     /// Projected centre, pixels.
     pub centre: Vec2,
     pub visible_fraction: f32,
+    /// Visible pixels.
+    pub visible_px: u32,
 }
 
 /// A subject's body, meshed, with the suit pattern, ready to draw from one camera.
@@ -267,6 +269,7 @@ impl<'a> BodyRenderer<'a> {
                 colour: cell.colour,
                 centre,
                 visible_fraction: fraction,
+                visible_px: count,
             });
         }
         out

@@ -434,6 +434,7 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
                         x: m.centre.x,
                         y: m.centre.y,
                         visible_fraction: m.visible_fraction,
+                        visible_px: m.visible_px,
                     })
                     .collect();
                 progress();

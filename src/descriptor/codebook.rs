@@ -1,0 +1,262 @@
+//! k-means codebooks and soft vector quantisation.
+//!
+//! A frame yields a variable number of local histograms (one per marker, per HOG block, per contour
+//! point). A [`Codebook`] of k centres, learned by k-means (`linfa-clustering`, fixed seed) over the
+//! training frames' histograms, turns them into one fixed-length vector: each histogram votes softly
+//! into its 5 nearest centres with Gaussian weights (σ² = the mean squared distance of those 5, so
+//! the vote adapts to how far the histogram is from the codebook), the weights of one vote sum to 1,
+//! and the frame's k votes are normalised to sum 1. The result is one block of the frame descriptor.
+
+use std::path::{Path, PathBuf};
+
+use linfa::prelude::*;
+use linfa::DatasetBase;
+use linfa_clustering::KMeans;
+use ndarray::Array2;
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_pcg::Pcg64Mcg;
+
+use crate::model::{ModelError, ModelFile};
+
+/// Version of the codebook files.
+pub const CODEBOOK_VERSION: u32 = 1;
+/// Number of nearest centres a histogram votes into.
+pub const SOFT_VOTES: usize = 5;
+
+/// k centres of dimension `dim`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Codebook {
+    dim: usize,
+    centres: Vec<f32>,
+}
+
+/// Why a codebook could not be learned.
+#[derive(Debug, thiserror::Error)]
+pub enum CodebookError {
+    #[error(
+        "{what}: {got} training vectors for {k} centres; need at least as many vectors as centres"
+    )]
+    TooFewVectors { what: String, got: usize, k: usize },
+    #[error("{what}: k-means failed: {message}")]
+    KMeans { what: String, message: String },
+}
+
+/// Squared Euclidean distance.
+#[inline]
+pub fn squared_distance(a: &[f32], b: &[f32]) -> f32 {
+    // Eight independent accumulators let the compiler vectorise the loop.
+    let mut acc = [0.0f32; 8];
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for k in 0..8 {
+            let d = x[k] - y[k];
+            acc[k] += d * d;
+        }
+    }
+    let mut sum: f32 = acc.iter().sum();
+    for (x, y) in ra.iter().zip(rb) {
+        sum += (x - y) * (x - y);
+    }
+    sum
+}
+
+impl Codebook {
+    /// A codebook from `k × dim` centre values.
+    pub fn from_centres(dim: usize, centres: Vec<f32>) -> Option<Codebook> {
+        (dim > 0 && !centres.is_empty() && centres.len() % dim == 0)
+            .then_some(Codebook { dim, centres })
+    }
+
+    pub fn k(&self) -> usize {
+        self.centres.len() / self.dim
+    }
+
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    pub fn centre(&self, i: usize) -> &[f32] {
+        &self.centres[i * self.dim..(i + 1) * self.dim]
+    }
+
+    /// Adds the soft vote of `histogram` (weights summing to 1 over its nearest centres) to `votes`.
+    pub fn vote(&self, histogram: &[f32], votes: &mut [f32]) {
+        let n = SOFT_VOTES.min(self.k());
+        let mut best: [(f32, usize); SOFT_VOTES] = [(f32::INFINITY, 0); SOFT_VOTES];
+        for c in 0..self.k() {
+            let d = squared_distance(histogram, self.centre(c));
+            if d < best[n - 1].0 {
+                let mut at = n - 1;
+                while at > 0 && best[at - 1].0 > d {
+                    best[at] = best[at - 1];
+                    at -= 1;
+                }
+                best[at] = (d, c);
+            }
+        }
+        let sigma2 = (best[..n].iter().map(|b| b.0).sum::<f32>() / n as f32).max(1e-12);
+        let weights: Vec<f32> = best[..n]
+            .iter()
+            .map(|b| (-(b.0 - best[0].0) / (2.0 * sigma2)).exp())
+            .collect();
+        let total: f32 = weights.iter().sum();
+        for (w, b) in weights.iter().zip(&best[..n]) {
+            votes[b.1] += w / total;
+        }
+    }
+
+    /// The normalised votes of many histograms (`count × dim` values) into `out` (k values): all zero
+    /// when there are none.
+    pub fn quantise(&self, histograms: &[f32], out: &mut [f32]) {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        let mut count = 0usize;
+        for h in histograms.chunks_exact(self.dim) {
+            self.vote(h, out);
+            count += 1;
+        }
+        if count > 0 {
+            out.iter_mut().for_each(|v| *v /= count as f32);
+        }
+    }
+
+    /// k-means over `vectors` (`n × dim`), subsampled to at most `max_vectors` with `seed`.
+    /// Returns the codebook and the inertia (mean squared distance of a vector to its centre).
+    pub fn train(
+        what: &str,
+        vectors: &[f32],
+        dim: usize,
+        k: usize,
+        max_vectors: usize,
+        seed: u64,
+    ) -> Result<(Codebook, f64), CodebookError> {
+        let n = vectors.len() / dim.max(1);
+        if n < k || k == 0 {
+            return Err(CodebookError::TooFewVectors {
+                what: what.into(),
+                got: n,
+                k,
+            });
+        }
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let mut order: Vec<usize> = (0..n).collect();
+        order.shuffle(&mut rng);
+        order.truncate(max_vectors.max(k));
+        let mut data = Vec::with_capacity(order.len() * dim);
+        for &i in &order {
+            data.extend_from_slice(&vectors[i * dim..(i + 1) * dim]);
+        }
+        let array = Array2::from_shape_vec((order.len(), dim), data).map_err(|e| {
+            CodebookError::KMeans {
+                what: what.into(),
+                message: e.to_string(),
+            }
+        })?;
+        let dataset = DatasetBase::from(array);
+        let model = KMeans::params_with_rng(k, rng)
+            .n_runs(1)
+            .max_n_iterations(40)
+            .tolerance(1e-4)
+            .fit(&dataset)
+            .map_err(|e| CodebookError::KMeans {
+                what: what.into(),
+                message: e.to_string(),
+            })?;
+        let centres: Vec<f32> = model.centroids().iter().copied().collect();
+        let codebook = Codebook { dim, centres };
+        let inertia = model.inertia() as f64 / order.len() as f64;
+        Ok((codebook, inertia))
+    }
+
+    /// Writes the codebook as a model file of `kind`.
+    pub fn save(&self, path: &Path, kind: &str) -> Result<(), ModelError> {
+        let mut m = ModelFile::new(kind, CODEBOOK_VERSION);
+        m.push("centres", &[self.k(), self.dim], self.centres.clone());
+        m.write(path)
+    }
+
+    /// Reads a codebook of `kind` with exactly `k` centres of `dim`.
+    pub fn load(path: &Path, kind: &str, k: usize, dim: usize) -> Result<Codebook, ModelError> {
+        let m = ModelFile::read(path, kind, CODEBOOK_VERSION)?;
+        let centres = m.array(path, "centres", &[k, dim])?.to_vec();
+        Ok(Codebook { dim, centres })
+    }
+}
+
+/// Where a suit keeps each codebook.
+pub fn codebook_path(suit_dir: &Path, kind: &str) -> PathBuf {
+    suit_dir.join(format!("{kind}.bin"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn grid_codebook() -> Codebook {
+        // Six centres on a line: (0,0), (1,0), …, (5,0).
+        Codebook::from_centres(2, (0..6).flat_map(|i| [i as f32, 0.0]).collect()).expect("valid")
+    }
+
+    #[test]
+    fn a_vote_goes_to_the_nearest_centres_and_sums_to_one() {
+        let c = grid_codebook();
+        let mut votes = vec![0.0; 6];
+        c.vote(&[0.0, 0.0], &mut votes);
+        assert!((votes.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+        assert!(votes[0] > votes[1] && votes[1] > votes[2] && votes[5] == 0.0);
+        // Exactly between centres 2 and 3: equal votes.
+        let mut votes = vec![0.0; 6];
+        c.vote(&[2.5, 0.0], &mut votes);
+        assert!((votes[2] - votes[3]).abs() < 1e-6);
+    }
+
+    #[test]
+    fn quantising_nothing_gives_zeros() {
+        let mut out = vec![1.0; 6];
+        grid_codebook().quantise(&[], &mut out);
+        assert!(out.iter().all(|&v| v == 0.0));
+    }
+
+    #[test]
+    fn kmeans_finds_three_clusters_and_round_trips() {
+        let mut data = Vec::new();
+        for i in 0..300 {
+            let centre = [[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]][i % 3];
+            let jitter = (i as f32 * 0.618).fract() - 0.5;
+            data.extend_from_slice(&[centre[0] + jitter, centre[1] - jitter]);
+        }
+        let (codebook, inertia) = Codebook::train("test", &data, 2, 3, 1000, 7).expect("trains");
+        assert!(inertia < 0.2, "{inertia}");
+        let mut found: Vec<(i32, i32)> = (0..3)
+            .map(|i| {
+                (
+                    codebook.centre(i)[0].round() as i32,
+                    codebook.centre(i)[1].round() as i32,
+                )
+            })
+            .collect();
+        found.sort();
+        assert_eq!(found, vec![(0, 0), (0, 10), (10, 0)]);
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("c.bin");
+        codebook.save(&path, "test-codebook").expect("save");
+        assert_eq!(
+            Codebook::load(&path, "test-codebook", 3, 2).expect("load"),
+            codebook
+        );
+        assert!(Codebook::load(&path, "test-codebook", 4, 2).is_err());
+        assert!(Codebook::train("few", &data[..4], 2, 3, 10, 1).is_err());
+    }
+
+    proptest! {
+        #[test]
+        fn soft_votes_of_any_vector_sum_to_one(v in proptest::collection::vec(-10.0f32..10.0, 2)) {
+            let mut votes = vec![0.0; 6];
+            grid_codebook().vote(&v, &mut votes);
+            prop_assert!((votes.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+            prop_assert!(votes.iter().all(|w| w.is_finite() && *w >= 0.0));
+        }
+    }
+}
