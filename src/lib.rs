@@ -23,6 +23,8 @@ pub mod descriptor;
 pub mod io;
 pub mod mask;
 pub mod model;
+pub mod pipeline;
+pub mod pose;
 pub mod raster;
 pub mod segment;
 pub mod skeleton;

@@ -165,7 +165,8 @@ impl Codebook {
             })?;
         let centres: Vec<f32> = model.centroids().iter().copied().collect();
         let codebook = Codebook { dim, centres };
-        let inertia = model.inertia() as f64 / order.len() as f64;
+        // linfa reports the inertia already divided by the number of samples.
+        let inertia = model.inertia() as f64;
         Ok((codebook, inertia))
     }
 

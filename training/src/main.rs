@@ -2,7 +2,9 @@
 //!
 //! Subcommands so far: `segment` learns the segmenter's lookup tables and term weights from consecutive
 //! frames with masks of a dataset (the generator's format, `suitcap::dataset`); `codebooks` learns the
-//! Feature Context, HOG and silhouette codebooks by k-means over the datasets' local histograms.
+//! Feature Context, HOG and silhouette codebooks by k-means over the datasets' local histograms;
+//! `suit` trains a whole suit (every stage the suit directory lacks, then the RVM pose regressor);
+//! `eval` measures a trained suit's joint-angle error on datasets with ground truth.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -61,6 +63,41 @@ enum Command {
         max_vectors: usize,
         #[arg(long, default_value_t = 1)]
         seed: u64,
+    },
+    /// Train a suit from mocap-aligned datasets: the segmenter and codebooks if the suit directory
+    /// lacks them, then the RVM regressor. Written atomically: an interrupted run leaves the old model.
+    Suit {
+        #[arg(long)]
+        suit: PathBuf,
+        #[arg(long, required = true)]
+        data: Vec<PathBuf>,
+        /// Candidate basis functions S (k-means centres over the training descriptors).
+        #[arg(long, default_value_t = 1500)]
+        basis: usize,
+        /// fc+hog (default, with the silhouette box: 304 values), fc, hog, or silhouette.
+        #[arg(long, default_value = "fc+hog")]
+        descriptor: String,
+        /// Kernel width; default: chosen on held-back frames among ¼, ½, 1 and 2 × the median distance.
+        #[arg(long)]
+        width: Option<f32>,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Joint-angle error of a trained suit on datasets with ground truth.
+    Eval {
+        #[arg(long)]
+        suit: PathBuf,
+        #[arg(long, required = true)]
+        data: Vec<PathBuf>,
+        /// Use the datasets' ground-truth masks instead of the segmenter.
+        #[arg(long)]
+        truth_masks: bool,
+        /// Also write the per-joint table as CSV.
+        #[arg(long)]
+        csv: Option<PathBuf>,
+        /// Also write a JSON summary.
+        #[arg(long)]
+        json: Option<PathBuf>,
     },
 }
 
@@ -209,6 +246,336 @@ fn codebooks(
     Ok(())
 }
 
+/// Descriptors and pose vectors of every frame with a person in a dataset (ground-truth masks).
+fn training_set(
+    dataset: &Dataset,
+    suit: &SuitDefinition,
+    codebooks: &suitcap::descriptor::Codebooks,
+    kind: suitcap::descriptor::DescriptorKind,
+) -> anyhow::Result<(Vec<f32>, Vec<f32>, usize)> {
+    use rayon::prelude::*;
+    use suitcap::descriptor::Describer;
+    use suitcap::pose::PoseLayout;
+    let layout = PoseLayout::new(&suit.skeleton, &dataset.motion.skeleton)
+        .with_context(|| format!("{}: motion.bvh", dataset.root.display()))?;
+    let rows = (0..dataset.frame_count())
+        .into_par_iter()
+        .map_init(
+            || Describer::new(suit),
+            |describer, index| -> anyhow::Result<Option<(Vec<f32>, Vec<f32>)>> {
+                let (image, mask) = frame_and_mask(dataset, index)?;
+                let (d, _) = describer.describe(&image, &mask, kind, codebooks);
+                let Some((x0, y0, x1, y1)) = mask.bounding_box().filter(|_| d.person) else {
+                    return Ok(None);
+                };
+                let bbox = (x0 as f32, y0 as f32, x1 as f32, y1 as f32);
+                let pose = layout.encode(
+                    &dataset.motion.skeleton,
+                    dataset.motion.frame(index),
+                    &dataset.camera,
+                    bbox,
+                );
+                Ok(Some((d.values, pose)))
+            },
+        )
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let (mut x, mut y, mut n) = (Vec::new(), Vec::new(), 0);
+    for (d, p) in rows.into_iter().flatten() {
+        x.extend(d);
+        y.extend(p);
+        n += 1;
+    }
+    Ok((x, y, n))
+}
+
+/// Mean Euler error (degrees) of predictions for `x` against pose vectors `y`, decoded on `motion`'s
+/// skeleton with a neutral camera (only the joint angles are compared).
+fn pose_vector_error(rvm: &suitcap::pose::rvm::Rvm, x: &[f32], y: &[f32], outputs: usize) -> f64 {
+    let dim = rvm.dim;
+    let (mut total, mut count) = (0.0f64, 0usize);
+    let mut out = vec![0.0f32; outputs];
+    for (xi, yi) in x.chunks_exact(dim).zip(y.chunks_exact(outputs)) {
+        rvm.predict_into(xi, &mut out);
+        for (a, b) in out[..outputs - 3]
+            .chunks(2)
+            .zip(yi[..outputs - 3].chunks(2))
+        {
+            let (pa, pb) = (a[0].atan2(a[1]), b[0].atan2(b[1]));
+            total += suitcap::pose::eval::wrap_degrees((pa - pb).to_degrees()).abs() as f64;
+            count += 1;
+        }
+    }
+    total / count.max(1) as f64
+}
+
+fn train_suit(
+    suit_dir: &PathBuf,
+    data: &[PathBuf],
+    basis: usize,
+    descriptor: &str,
+    width: Option<f32>,
+    seed: u64,
+) -> anyhow::Result<()> {
+    use suitcap::descriptor::{Codebooks, DescriptorKind};
+    use suitcap::pose::regressor::Regressor;
+    use suitcap::pose::rvm::{median_distance, Rvm, TrainOptions};
+    let started = std::time::Instant::now();
+    let mut kind = DescriptorKind::parse(descriptor)
+        .with_context(|| format!("--descriptor '{descriptor}'"))?;
+    if kind == DescriptorKind::FcHog {
+        kind = DescriptorKind::Full; // the paper's descriptor carries the silhouette box too
+    }
+    let suit = SuitDefinition::load_dir(suit_dir)?;
+    let first = data.first().context("no --data")?;
+    if !suit_dir
+        .join(suitcap::segment::tables::SEGMENTER_FILE)
+        .exists()
+    {
+        println!(
+            "stage 1/3: segmenter (not in {}), from 20 frames of {}",
+            suit_dir.display(),
+            first.display()
+        );
+        segment(suit_dir, first, 20, 0, 6, 2)?;
+    } else {
+        println!("stage 1/3: segmenter present");
+    }
+    let codebooks = match Codebooks::load(suit_dir) {
+        Ok(c) => {
+            println!("stage 2/3: codebooks present");
+            c
+        }
+        Err(_) => {
+            println!("stage 2/3: codebooks");
+            codebooks(suit_dir, data, 20_000, seed)?;
+            Codebooks::load(suit_dir)?
+        }
+    };
+    println!("stage 3/3: RVM regressor on the {} descriptor", kind.name());
+    let (mut train_x, mut train_y, mut held_x, mut held_y) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut outputs = 0;
+    let mut total = 0;
+    for dir in data {
+        let dataset = Dataset::open(dir)?;
+        let (x, y, n) = training_set(&dataset, &suit, &codebooks, kind)?;
+        if n == 0 {
+            continue;
+        }
+        outputs = y.len() / n;
+        // Every tenth frame is held back to choose the kernel width.
+        for (k, (xi, yi)) in x
+            .chunks_exact(kind.len())
+            .zip(y.chunks_exact(outputs))
+            .enumerate()
+        {
+            let (tx, ty) = if k % 10 == 9 {
+                (&mut held_x, &mut held_y)
+            } else {
+                (&mut train_x, &mut train_y)
+            };
+            tx.extend_from_slice(xi);
+            ty.extend_from_slice(yi);
+        }
+        total += n;
+    }
+    let dim = kind.len();
+    let n_train = train_x.len() / dim;
+    if n_train < 10 {
+        bail!(
+            "only {n_train} training frames with a person in {} datasets",
+            data.len()
+        );
+    }
+    let median = median_distance(&train_x, n_train, dim, seed);
+    let width = match width {
+        Some(w) => w,
+        None => {
+            let mut best = (f64::INFINITY, median);
+            for factor in [0.25f32, 0.5, 1.0, 2.0] {
+                let w = median * factor;
+                let options = TrainOptions {
+                    basis: basis.min(500),
+                    width: w,
+                    max_iterations: 2000,
+                    tolerance: 1e-3,
+                    seed,
+                };
+                let (rvm, report) =
+                    Rvm::train(&train_x, n_train, dim, &train_y, outputs, &options)?;
+                let error = pose_vector_error(&rvm, &held_x, &held_y, outputs);
+                println!("  width {w:.4} ({factor} × median): {} relevance vectors, held-back angle error {error:.2}°", report.relevance_vectors);
+                if error < best.0 {
+                    best = (error, w);
+                }
+            }
+            best.1
+        }
+    };
+    // Final model on every frame.
+    train_x.extend_from_slice(&held_x);
+    train_y.extend_from_slice(&held_y);
+    let n = train_x.len() / dim;
+    let options = TrainOptions {
+        basis,
+        width,
+        max_iterations: 5000,
+        tolerance: 1e-3,
+        seed,
+    };
+    let (rvm, report) = Rvm::train(&train_x, n, dim, &train_y, outputs, &options)?;
+    let first_dataset = Dataset::open(first)?;
+    let template = suitcap::bvh::Motion::new(
+        first_dataset.motion.skeleton.clone(),
+        first_dataset.motion.frame_time,
+        first_dataset.motion.frame(0).to_vec(),
+    )?;
+    let layout = suitcap::pose::PoseLayout::new(&suit.skeleton, &template.skeleton)?;
+    let regressor = Regressor {
+        rvm,
+        descriptor: kind,
+        skeleton: template,
+        layout,
+    };
+    // Write into a scratch directory first, then move each file into place, the manifest last.
+    let scratch = suit_dir.join(format!(".training-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch)
+        .with_context(|| format!("cannot create {}", scratch.display()))?;
+    regressor.save(&scratch)?;
+    let manifest = format!(
+        "# suitcap suit model, written by suitcap-train {}\nformat = 1\ndescriptor = \"{}\"\nbasis_candidates = {}\nrelevance_vectors = {}\nkernel_width = {}\nnoise = {}\ntraining_frames = {}\ndatasets = [{}]\n",
+        env!("CARGO_PKG_VERSION"),
+        kind.name(),
+        report.candidates,
+        report.relevance_vectors,
+        width,
+        report.noise,
+        total,
+        data.iter().map(|d| format!("\"{}\"", d.display())).collect::<Vec<_>>().join(", ")
+    );
+    std::fs::write(scratch.join("model.toml"), manifest)
+        .with_context(|| format!("cannot write {}", scratch.display()))?;
+    for name in [
+        suitcap::pose::regressor::REGRESSOR_FILE,
+        suitcap::pose::regressor::SKELETON_FILE,
+        "model.toml",
+    ] {
+        std::fs::rename(scratch.join(name), suit_dir.join(name))
+            .with_context(|| format!("cannot move {name} into {}", suit_dir.display()))?;
+    }
+    let _ = std::fs::remove_dir(&scratch);
+    println!(
+        "suit trained in {:.1} s: {} frames, {} candidates, {} relevance vectors, kernel width {width:.4}, noise σ² {:.5}, RVM {:.1} s ({} iterations); written to {}",
+        started.elapsed().as_secs_f64(),
+        total,
+        report.candidates,
+        report.relevance_vectors,
+        report.noise,
+        report.seconds,
+        report.iterations,
+        suit_dir.display()
+    );
+    Ok(())
+}
+
+fn eval(
+    suit_dir: &PathBuf,
+    data: &[PathBuf],
+    truth_masks: bool,
+    csv: Option<&PathBuf>,
+    json: Option<&PathBuf>,
+) -> anyhow::Result<()> {
+    use suitcap::pipeline::PosePipeline;
+    use suitcap::pose::eval::JointErrors;
+    let mut pipeline = PosePipeline::load(suit_dir)?;
+    let names: Vec<String> = pipeline
+        .suit
+        .skeleton
+        .joints
+        .iter()
+        .map(|j| j.name.clone())
+        .collect();
+    let mut all = JointErrors::new(names.clone());
+    let mut per_dataset = Vec::new();
+    for dir in data {
+        let dataset = Dataset::open(dir)?;
+        let layout =
+            suitcap::pose::PoseLayout::new(&pipeline.suit.skeleton, &dataset.motion.skeleton)?;
+        pipeline.reset();
+        let mut errors = JointErrors::new(names.clone());
+        let mut missed = 0;
+        for index in 0..dataset.frame_count() {
+            let (image, mask) = frame_and_mask(&dataset, index)?;
+            let result = pipeline.process(&image, &dataset.camera, truth_masks.then_some(&mask));
+            if !result.person {
+                missed += 1;
+                continue;
+            }
+            errors.add(&layout, dataset.motion.frame(index), &result.frame);
+        }
+        println!(
+            "{}: {} frames ({} with nobody found), clip {}, subject {}: mean joint angle error {:.2}° (Euler), {:.2}° (geodesic)",
+            dir.display(), dataset.frame_count(), missed, dataset.manifest.clip.name, dataset.manifest.subject.name, errors.mean_euler(), errors.mean_geodesic()
+        );
+        all.merge(&errors);
+        per_dataset.push((
+            dir.display().to_string(),
+            errors.mean_euler(),
+            errors.mean_geodesic(),
+            errors.frames,
+        ));
+    }
+    println!("{:<18} {:>9} {:>9}", "joint", "Euler °", "geodesic °");
+    for (j, name) in names.iter().enumerate() {
+        println!("{name:<18} {:>9.2} {:>9.2}", all.euler(j), all.geodesic(j));
+    }
+    println!(
+        "{:<18} {:>9.2} {:>9.2}   ({} frames, masks: {})",
+        "mean",
+        all.mean_euler(),
+        all.mean_geodesic(),
+        all.frames,
+        if truth_masks {
+            "ground truth"
+        } else {
+            "segmenter"
+        }
+    );
+    if let Some(path) = csv {
+        suitcap::io::write_atomic(path, all.to_csv().as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let Some(path) = json {
+        let datasets: Vec<String> = per_dataset
+            .iter()
+            .map(|(d, e, g, f)| format!("{{\"dataset\": \"{d}\", \"frames\": {f}, \"euler_deg\": {e:.4}, \"geodesic_deg\": {g:.4}}}"))
+            .collect();
+        let joints: Vec<String> = names
+            .iter()
+            .enumerate()
+            .map(|(j, n)| {
+                format!(
+                    "{{\"joint\": \"{n}\", \"euler_deg\": {:.4}, \"geodesic_deg\": {:.4}}}",
+                    all.euler(j),
+                    all.geodesic(j)
+                )
+            })
+            .collect();
+        let text = format!(
+            "{{\"masks\": \"{}\", \"mean_euler_deg\": {:.4}, \"mean_geodesic_deg\": {:.4}, \"frames\": {},\n \"datasets\": [{}],\n \"joints\": [{}]}}\n",
+            if truth_masks { "ground truth" } else { "segmenter" },
+            all.mean_euler(),
+            all.mean_geodesic(),
+            all.frames,
+            datasets.join(", "),
+            joints.join(", ")
+        );
+        suitcap::io::write_atomic(path, text.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -226,6 +593,21 @@ fn main() -> ExitCode {
             max_vectors,
             seed,
         } => codebooks(suit, data, *max_vectors, *seed),
+        Command::Suit {
+            suit,
+            data,
+            basis,
+            descriptor,
+            width,
+            seed,
+        } => train_suit(suit, data, *basis, descriptor, *width, *seed),
+        Command::Eval {
+            suit,
+            data,
+            truth_masks,
+            csv,
+            json,
+        } => eval(suit, data, *truth_masks, csv.as_ref(), json.as_ref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

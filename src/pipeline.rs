@@ -1,0 +1,152 @@
+//! The pose pipeline for one stream: frame → mask → descriptor → pose vector → BVH frame.
+//!
+//! [`PosePipeline`] holds a suit's trained models and the per-stream state (the segmenter's history, the
+//! last pose). [`PosePipeline::process`] segments the frame (or takes a given mask), describes it,
+//! regresses the pose vector with the RVM and decodes it through the camera into a BVH frame of the
+//! suit's skeleton. A frame with nobody in it keeps the previous pose and is flagged, so a take has one
+//! BVH frame per video frame.
+
+use std::path::Path;
+use std::time::Instant;
+
+use image::RgbImage;
+
+use crate::camera::Camera;
+use crate::descriptor::{Codebooks, Describer};
+use crate::mask::Mask;
+use crate::model::ModelError;
+use crate::pose::regressor::{Regressor, RegressorError};
+use crate::segment::{Segmenter, SegmenterOptions, SegmenterTables};
+use crate::suit::{SuitDefinition, SuitError};
+
+/// A suit's models that cannot be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    #[error(transparent)]
+    Suit(#[from] SuitError),
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error(transparent)]
+    Regressor(#[from] RegressorError),
+}
+
+/// Milliseconds per stage.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PoseTimes {
+    pub segment: f64,
+    pub describe: f64,
+    pub regress: f64,
+}
+
+/// The result for one frame.
+#[derive(Clone, Debug)]
+pub struct PoseFrame {
+    /// BVH channel values of the suit's skeleton.
+    pub frame: Vec<f32>,
+    /// False when nobody was seen: `frame` is then the previous pose (or the template).
+    pub person: bool,
+    pub mask: Mask,
+    pub markers: usize,
+    /// The regressed pose vector (empty when nobody was seen).
+    pub pose: Vec<f32>,
+    pub times: PoseTimes,
+}
+
+/// One stream's pose estimator.
+pub struct PosePipeline {
+    pub suit: SuitDefinition,
+    segmenter: Segmenter,
+    describer: Describer,
+    codebooks: Codebooks,
+    pub regressor: Regressor,
+    last: Option<Vec<f32>>,
+    pose: Vec<f32>,
+}
+
+impl PosePipeline {
+    /// Loads every model of a suit directory.
+    pub fn load(suit_dir: &Path) -> Result<PosePipeline, PipelineError> {
+        let suit = SuitDefinition::load_dir(suit_dir)?;
+        let segmenter = Segmenter::new(
+            SegmenterTables::load(suit_dir)?,
+            &suit,
+            SegmenterOptions::default(),
+        );
+        let codebooks = Codebooks::load(suit_dir)?;
+        let regressor = Regressor::load(suit_dir, &suit)?;
+        let describer = Describer::new(&suit);
+        let pose = vec![0.0; regressor.layout.len()];
+        Ok(PosePipeline {
+            suit,
+            segmenter,
+            describer,
+            codebooks,
+            regressor,
+            last: None,
+            pose,
+        })
+    }
+
+    /// Forgets the stream's history (a new take, or the camera moved).
+    pub fn reset(&mut self) {
+        self.segmenter.reset();
+        self.last = None;
+    }
+
+    /// Estimates the pose in one frame seen by `camera`; `mask` replaces the segmenter when given.
+    pub fn process(&mut self, image: &RgbImage, camera: &Camera, mask: Option<&Mask>) -> PoseFrame {
+        let mut times = PoseTimes::default();
+        let started = Instant::now();
+        let mask = match mask {
+            Some(m) => m.clone(),
+            None => self.segmenter.segment(image).mask,
+        };
+        times.segment = ms(started);
+        let started = Instant::now();
+        let (descriptor, markers) =
+            self.describer
+                .describe(image, &mask, self.regressor.descriptor, &self.codebooks);
+        times.describe = ms(started);
+        let bbox = mask.bounding_box();
+        let (Some((x0, y0, x1, y1)), true) = (bbox, descriptor.person) else {
+            let frame = self
+                .last
+                .clone()
+                .unwrap_or_else(|| self.regressor.template().to_vec());
+            return PoseFrame {
+                frame,
+                person: false,
+                mask,
+                markers: 0,
+                pose: Vec::new(),
+                times,
+            };
+        };
+        let started = Instant::now();
+        self.regressor
+            .rvm
+            .predict_into(&descriptor.values, &mut self.pose);
+        let bbox = (x0 as f32, y0 as f32, x1 as f32, y1 as f32);
+        let frame = self.regressor.layout.decode(
+            &self.regressor.skeleton.skeleton,
+            &self.pose,
+            self.regressor.template(),
+            camera,
+            bbox,
+        );
+        times.regress = ms(started);
+        self.last = Some(frame.clone());
+        PoseFrame {
+            frame,
+            person: true,
+            mask,
+            markers: markers.len(),
+            pose: self.pose.clone(),
+            times,
+        }
+    }
+}
+
+fn ms(started: Instant) -> f64 {
+    started.elapsed().as_secs_f64() * 1e3
+}

@@ -1,0 +1,331 @@
+//! The pose vector the regressor predicts, and its decoding into a BVH frame (source paper sec. 3.2).
+//!
+//! For the suit's J estimated joints ([`PoseLayout`]) the vector holds, per joint, the sine and cosine of
+//! its three BVH rotation angles in the file's own channel order (6 values), then the root's image
+//! offset from the silhouette box's centre (2 values, in box heights) and its depth (1 value: camera
+//! depth × box height / focal length, which is about the person's height in world units and does not
+//! change with the distance): 6·J + 3 values (105 for the default suit's 17 joints). The root's
+//! rotation is expressed relative to the camera, since that is what the image shows; decoding turns
+//! it back into the world with the camera's extrinsics and puts the root where the offset and depth
+//! say, through the intrinsics. Decoding rescales each (sin, cos) pair to unit length before `atan2`.
+//! The joints the suit does not estimate keep the values of a template frame.
+
+pub mod eval;
+pub mod regressor;
+pub mod rvm;
+
+use glam::{Mat3, Vec2, Vec3};
+
+use crate::camera::Camera;
+use crate::skeleton::{Channel, Skeleton};
+use crate::suit::{BindError, SuitSkeleton};
+
+/// Rotation of one channel's axis by `degrees`.
+fn axis_rotation(channel: Channel, degrees: f32) -> Mat3 {
+    Mat3::from_axis_angle(Vec3::from(channel.axis()), degrees.to_radians())
+}
+
+/// The rotation `R_a(α)·R_b(β)·R_c(γ)` of three rotation channels in order.
+pub fn compose(channels: [Channel; 3], degrees: [f32; 3]) -> Mat3 {
+    axis_rotation(channels[0], degrees[0])
+        * axis_rotation(channels[1], degrees[1])
+        * axis_rotation(channels[2], degrees[2])
+}
+
+fn axis_index(c: Channel) -> usize {
+    match c {
+        Channel::Xrotation | Channel::Xposition => 0,
+        Channel::Yrotation | Channel::Yposition => 1,
+        Channel::Zrotation | Channel::Zposition => 2,
+    }
+}
+
+/// Euler angles (degrees) of `r` for three distinct rotation axes in order, so that
+/// `compose(channels, decompose(channels, r)) == r` (the middle angle in [−90°, 90°]).
+pub fn decompose(channels: [Channel; 3], r: Mat3) -> [f32; 3] {
+    let (i, j, k) = (
+        axis_index(channels[0]),
+        axis_index(channels[1]),
+        axis_index(channels[2]),
+    );
+    // +1 for an even permutation of (x, y, z), −1 for an odd one.
+    let s = if (j + 3 - i) % 3 == 1 { 1.0 } else { -1.0 };
+    let m = |row: usize, col: usize| r.col(col)[row];
+    let beta = (s * m(i, k)).clamp(-1.0, 1.0).asin();
+    let (alpha, gamma) = if beta.cos() > 1e-6 {
+        ((-s * m(j, k)).atan2(m(k, k)), (-s * m(i, j)).atan2(m(i, i)))
+    } else {
+        // Gimbal lock: only α ± γ is defined; put it all in α.
+        ((s * m(k, j)).atan2(m(j, j)), 0.0)
+    };
+    [alpha.to_degrees(), beta.to_degrees(), gamma.to_degrees()]
+}
+
+/// Where each estimated joint's values live in a BVH frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseLayout {
+    /// Per suit joint: its BVH joint index and the frame indices of its three rotation channels.
+    pub joints: Vec<(usize, [usize; 3])>,
+    /// Channel types of each joint's rotations, in file order.
+    pub orders: Vec<[Channel; 3]>,
+    /// Frame indices of the root's X, Y, Z position channels.
+    pub root_position: [usize; 3],
+}
+
+/// A skeleton the pose vector cannot describe.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum LayoutError {
+    #[error(transparent)]
+    Bind(#[from] BindError),
+    #[error("BVH joint '{0}' does not have exactly three rotation channels")]
+    Rotations(String),
+    #[error("the root joint '{0}' has no X, Y and Z position channels")]
+    RootPosition(String),
+    #[error("the suit's first joint '{0}' is not the BVH root")]
+    Root(String),
+}
+
+/// Length of a pose vector for `joints` joints.
+pub fn pose_len(joints: usize) -> usize {
+    6 * joints + 3
+}
+
+impl PoseLayout {
+    pub fn new(suit: &SuitSkeleton, skeleton: &Skeleton) -> Result<PoseLayout, LayoutError> {
+        let indices = suit.bind(skeleton)?;
+        let mut joints = Vec::new();
+        let mut orders = Vec::new();
+        for &j in &indices {
+            let joint = skeleton.joint(j);
+            let rotations: Vec<(usize, Channel)> = joint
+                .channels
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.is_rotation())
+                .map(|(k, &c)| (joint.first_channel + k, c))
+                .collect();
+            let [a, b, c] = rotations[..] else {
+                return Err(LayoutError::Rotations(joint.name.clone()));
+            };
+            joints.push((j, [a.0, b.0, c.0]));
+            orders.push([a.1, b.1, c.1]);
+        }
+        let root = skeleton.joint(0);
+        if indices.first() != Some(&0) {
+            return Err(LayoutError::Root(
+                suit.joints
+                    .first()
+                    .map(|j| j.bvh.clone())
+                    .unwrap_or_default(),
+            ));
+        }
+        let position = |axis: Channel| {
+            root.channels
+                .iter()
+                .position(|&c| c == axis)
+                .map(|k| root.first_channel + k)
+        };
+        let root_position = match (
+            position(Channel::Xposition),
+            position(Channel::Yposition),
+            position(Channel::Zposition),
+        ) {
+            (Some(x), Some(y), Some(z)) => [x, y, z],
+            _ => return Err(LayoutError::RootPosition(root.name.clone())),
+        };
+        Ok(PoseLayout {
+            joints,
+            orders,
+            root_position,
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        pose_len(self.joints.len())
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.joints.is_empty()
+    }
+
+    /// The pose vector of a BVH frame seen by `camera`, with the person's silhouette box
+    /// (x0, y0, x1, y1) in that camera's image.
+    pub fn encode(
+        &self,
+        skeleton: &Skeleton,
+        frame: &[f32],
+        camera: &Camera,
+        bbox: (f32, f32, f32, f32),
+    ) -> Vec<f32> {
+        let mut out = Vec::with_capacity(self.len());
+        for (n, ((_, channels), order)) in self.joints.iter().zip(&self.orders).enumerate() {
+            let mut angles = channels.map(|c| frame[c]);
+            if n == 0 {
+                let world = compose(*order, angles);
+                angles = decompose(*order, camera.rotation * world);
+            }
+            for a in angles {
+                let (s, c) = a.to_radians().sin_cos();
+                out.push(s);
+                out.push(c);
+            }
+        }
+        let root = root_world(skeleton, frame, self.root_position);
+        let (centre, height) = box_centre_height(bbox);
+        match camera.project(root) {
+            Some(p) => {
+                let offset = (p.pixel - centre) / height;
+                out.extend_from_slice(&[
+                    offset.x,
+                    offset.y,
+                    p.depth * height / camera.intrinsics.fy,
+                ]);
+            }
+            None => out.extend_from_slice(&[0.0, 0.0, 0.0]),
+        }
+        out
+    }
+
+    /// A BVH frame from a pose vector: the estimated joints from the vector, everything else from
+    /// `template` (same layout), the root rotation and position through `camera` and the box.
+    pub fn decode(
+        &self,
+        skeleton: &Skeleton,
+        pose: &[f32],
+        template: &[f32],
+        camera: &Camera,
+        bbox: (f32, f32, f32, f32),
+    ) -> Vec<f32> {
+        let mut frame = template.to_vec();
+        for (n, ((_, channels), order)) in self.joints.iter().zip(&self.orders).enumerate() {
+            let mut angles = [0.0f32; 3];
+            for (k, a) in angles.iter_mut().enumerate() {
+                let (s, c) = (pose[6 * n + 2 * k], pose[6 * n + 2 * k + 1]);
+                let norm = (s * s + c * c).sqrt();
+                *a = if norm > 1e-9 {
+                    (s / norm).atan2(c / norm).to_degrees()
+                } else {
+                    0.0
+                };
+            }
+            if n == 0 {
+                let in_camera = compose(*order, angles);
+                angles = decompose(*order, camera.rotation.transpose() * in_camera);
+            }
+            for (c, a) in channels.iter().zip(angles) {
+                frame[*c] = a;
+            }
+        }
+        let j = 6 * self.joints.len();
+        let (centre, height) = box_centre_height(bbox);
+        let pixel = centre + Vec2::new(pose[j], pose[j + 1]) * height;
+        let depth = pose[j + 2] * camera.intrinsics.fy / height.max(1e-3);
+        let world = camera.unproject(pixel, depth.max(1.0));
+        let offset = skeleton.joint(0).offset;
+        for (axis, &c) in self.root_position.iter().enumerate() {
+            frame[c] = world[axis] - offset[axis];
+        }
+        frame
+    }
+}
+
+fn box_centre_height((x0, y0, x1, y1): (f32, f32, f32, f32)) -> (Vec2, f32) {
+    (
+        Vec2::new(0.5 * (x0 + x1), 0.5 * (y0 + y1)),
+        (y1 - y0).max(1.0),
+    )
+}
+
+/// World position of the root joint for one frame.
+fn root_world(skeleton: &Skeleton, frame: &[f32], position: [usize; 3]) -> Vec3 {
+    skeleton.joint(0).offset + Vec3::new(frame[position[0]], frame[position[1]], frame[position[2]])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Intrinsics;
+    use proptest::prelude::*;
+    use std::path::Path;
+
+    const ORDERS: [[Channel; 3]; 2] = [
+        [Channel::Zrotation, Channel::Xrotation, Channel::Yrotation],
+        [Channel::Zrotation, Channel::Yrotation, Channel::Xrotation],
+    ];
+
+    fn close(a: Mat3, b: Mat3) -> bool {
+        (a - b).to_cols_array().iter().all(|v| v.abs() < 1e-4)
+    }
+
+    proptest! {
+        #[test]
+        fn decompose_inverts_compose(a in -179.0f32..179.0, b in -89.0f32..89.0, c in -179.0f32..179.0, order in 0usize..2) {
+            let r = compose(ORDERS[order], [a, b, c]);
+            let back = decompose(ORDERS[order], r);
+            prop_assert!(close(compose(ORDERS[order], back), r));
+            prop_assert!((back[1] - b).abs() < 0.05);
+        }
+    }
+
+    fn fixture() -> (crate::bvh::Motion, PoseLayout, Camera) {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let suit =
+            crate::suit::SuitDefinition::load_dir(&root.join("suits/default")).expect("suit");
+        let motion = crate::bvh::Motion::load(&root.join("tests/data/mocap/cmu_09_01_run.bvh"))
+            .expect("clip");
+        let layout = PoseLayout::new(&suit.skeleton, &motion.skeleton).expect("layout");
+        let camera = Camera::look_at(
+            Intrinsics::from_fov(640, 480, 60.0),
+            Vec3::new(150.0, 140.0, 400.0),
+            Vec3::new(0.0, 90.0, 0.0),
+            Vec3::Y,
+        );
+        (motion, layout, camera)
+    }
+
+    #[test]
+    fn default_suit_has_105_values() {
+        let (_, layout, _) = fixture();
+        assert_eq!(layout.len(), 105);
+    }
+
+    #[test]
+    fn encode_then_decode_gives_back_the_frame() {
+        let (motion, layout, camera) = fixture();
+        let bbox = (250.0, 100.0, 390.0, 420.0);
+        let template = motion.frame(0).to_vec();
+        for f in [20, 60, 120] {
+            let frame = motion.frame(f);
+            let pose = layout.encode(&motion.skeleton, frame, &camera, bbox);
+            assert_eq!(pose.len(), 105);
+            let back = layout.decode(&motion.skeleton, &pose, &template, &camera, bbox);
+            for ((_, channels), order) in layout.joints.iter().zip(&layout.orders) {
+                let a = compose(*order, channels.map(|c| frame[c]));
+                let b = compose(*order, channels.map(|c| back[c]));
+                assert!(close(a, b), "frame {f}: rotations differ");
+            }
+            for &c in &layout.root_position {
+                assert!(
+                    (frame[c] - back[c]).abs() < 0.05,
+                    "frame {f}: root {} vs {}",
+                    frame[c],
+                    back[c]
+                );
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn decoded_angles_come_from_unit_sin_cos_pairs(values in proptest::collection::vec(-2.0f32..2.0, 105)) {
+            let (motion, layout, camera) = fixture();
+            let bbox = (250.0, 100.0, 390.0, 420.0);
+            let back = layout.decode(&motion.skeleton, &values, motion.frame(0), &camera, bbox);
+            let again = layout.encode(&motion.skeleton, &back, &camera, bbox);
+            for pair in again[..102].chunks(2) {
+                prop_assert!((pair[0] * pair[0] + pair[1] * pair[1] - 1.0).abs() < 1e-4);
+            }
+            prop_assert!(back.iter().all(|v| v.is_finite()));
+        }
+    }
+}

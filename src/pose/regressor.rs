@@ -1,0 +1,179 @@
+//! The trained pose regressor of a suit: the RVM, which descriptor it reads, and the skeleton it
+//! writes.
+//!
+//! Stored in the suit directory as `regressor.bin` (the relevance vectors, the weight matrix, the kernel
+//! width, the noise estimate and the descriptor kind) and `skeleton.bvh` (the training mocap's
+//! hierarchy with one template frame whose values fill the joints the suit does not estimate). The
+//! runtime loads both, predicts a pose vector per frame and decodes it into a BVH frame.
+
+use std::path::{Path, PathBuf};
+
+use super::rvm::Rvm;
+use super::{LayoutError, PoseLayout};
+use crate::bvh::{BvhError, Motion};
+use crate::descriptor::DescriptorKind;
+use crate::model::{ModelError, ModelFile};
+use crate::suit::SuitDefinition;
+
+pub const REGRESSOR_KIND: &str = "regressor";
+pub const REGRESSOR_VERSION: u32 = 1;
+pub const REGRESSOR_FILE: &str = "regressor.bin";
+pub const SKELETON_FILE: &str = "skeleton.bvh";
+
+/// A loaded regressor.
+#[derive(Clone, Debug)]
+pub struct Regressor {
+    pub rvm: Rvm,
+    pub descriptor: DescriptorKind,
+    /// The hierarchy written to BVH, with the template frame.
+    pub skeleton: Motion,
+    pub layout: PoseLayout,
+}
+
+/// A regressor that cannot be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum RegressorError {
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error(transparent)]
+    Bvh(#[from] BvhError),
+    #[error("{path}: {source}")]
+    Layout { path: PathBuf, source: LayoutError },
+    #[error("{path}: {message}")]
+    Mismatch { path: PathBuf, message: String },
+}
+
+fn kind_code(kind: DescriptorKind) -> f32 {
+    match kind {
+        DescriptorKind::Fc => 0.0,
+        DescriptorKind::Hog => 1.0,
+        DescriptorKind::FcHog => 2.0,
+        DescriptorKind::Full => 3.0,
+        DescriptorKind::Silhouette => 4.0,
+    }
+}
+
+fn kind_from_code(code: f32) -> Option<DescriptorKind> {
+    [
+        DescriptorKind::Fc,
+        DescriptorKind::Hog,
+        DescriptorKind::FcHog,
+        DescriptorKind::Full,
+        DescriptorKind::Silhouette,
+    ]
+    .into_iter()
+    .find(|&k| kind_code(k) == code)
+}
+
+impl Regressor {
+    /// Writes `regressor.bin` and `skeleton.bvh` into `suit_dir`.
+    pub fn save(&self, suit_dir: &Path) -> Result<(), RegressorError> {
+        let r = &self.rvm;
+        let mut m = ModelFile::new(REGRESSOR_KIND, REGRESSOR_VERSION);
+        m.push("descriptor", &[1], vec![kind_code(self.descriptor)]);
+        m.push("width", &[1], vec![r.width]);
+        m.push("noise", &[1], vec![r.noise]);
+        m.push(
+            "relevance_vectors",
+            &[r.relevance_vectors.len() / r.dim.max(1), r.dim],
+            r.relevance_vectors.clone(),
+        );
+        m.push(
+            "weights",
+            &[r.weights.len() / r.outputs.max(1), r.outputs],
+            r.weights.clone(),
+        );
+        m.write(&suit_dir.join(REGRESSOR_FILE))?;
+        self.skeleton.write(&suit_dir.join(SKELETON_FILE))?;
+        Ok(())
+    }
+
+    /// Reads a suit's regressor, checking it against the suit's skeleton and its own shapes.
+    pub fn load(suit_dir: &Path, suit: &SuitDefinition) -> Result<Regressor, RegressorError> {
+        let path = suit_dir.join(REGRESSOR_FILE);
+        let m = ModelFile::read(&path, REGRESSOR_KIND, REGRESSOR_VERSION)?;
+        let skeleton = Motion::load(&suit_dir.join(SKELETON_FILE))?;
+        let layout = PoseLayout::new(&suit.skeleton, &skeleton.skeleton).map_err(|source| {
+            RegressorError::Layout {
+                path: suit_dir.join(SKELETON_FILE),
+                source,
+            }
+        })?;
+        let get = |name: &str| {
+            m.arrays
+                .iter()
+                .find(|a| a.name == name)
+                .ok_or_else(|| ModelError::Array {
+                    path: path.clone(),
+                    name: name.into(),
+                    message: "is missing".into(),
+                })
+        };
+        let descriptor =
+            kind_from_code(m.array(&path, "descriptor", &[1])?[0]).ok_or_else(|| {
+                RegressorError::Mismatch {
+                    path: path.clone(),
+                    message: "unknown descriptor kind".into(),
+                }
+            })?;
+        let width = m.array(&path, "width", &[1])?[0];
+        let noise = m.array(&path, "noise", &[1])?[0];
+        let rv = get("relevance_vectors")?;
+        let weights = get("weights")?;
+        let (count, dim) = match rv.dims[..] {
+            [count, dim] => (count, dim),
+            _ => {
+                return Err(RegressorError::Mismatch {
+                    path,
+                    message: "relevance_vectors is not a matrix".into(),
+                })
+            }
+        };
+        if dim != descriptor.len() {
+            return Err(RegressorError::Mismatch {
+                path,
+                message: format!(
+                    "relevance vectors have {dim} values, the {} descriptor has {}",
+                    descriptor.name(),
+                    descriptor.len()
+                ),
+            });
+        }
+        if weights.dims != [count + 1, layout.len()] {
+            return Err(RegressorError::Mismatch {
+                path,
+                message: format!(
+                    "weights are {:?}, expected [{}, {}]",
+                    weights.dims,
+                    count + 1,
+                    layout.len()
+                ),
+            });
+        }
+        if skeleton.frame_count() == 0 {
+            return Err(RegressorError::Mismatch {
+                path: suit_dir.join(SKELETON_FILE),
+                message: "no template frame".into(),
+            });
+        }
+        let rvm = Rvm {
+            dim,
+            outputs: layout.len(),
+            width,
+            relevance_vectors: rv.data.clone(),
+            weights: weights.data.clone(),
+            noise,
+        };
+        Ok(Regressor {
+            rvm,
+            descriptor,
+            skeleton,
+            layout,
+        })
+    }
+
+    /// The template frame (values of the joints the suit does not estimate).
+    pub fn template(&self) -> &[f32] {
+        self.skeleton.frame(0)
+    }
+}
