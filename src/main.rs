@@ -94,6 +94,19 @@ enum Command {
         #[arg(long)]
         truth_markers: Option<PathBuf>,
     },
+    /// Estimate the pose in every frame of a recording: OUT/take.bvh (one BVH frame per input frame,
+    /// on the suit's skeleton) and OUT/frames.csv (per frame: person seen, markers, milliseconds).
+    Run {
+        /// A directory of frames or a .y4m file.
+        input: String,
+        #[arg(long, default_value = "suits/default")]
+        suit: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// The camera's calibration; default: camera.toml beside the input (a dataset), else in the suit.
+        #[arg(long)]
+        camera: Option<PathBuf>,
+    },
     /// Validate a suit directory (suit.toml) and, optionally, a dataset against it.
     Check {
         #[arg(long, default_value = "suits/default")]
@@ -510,6 +523,85 @@ fn describe(
     Ok(())
 }
 
+fn run(input: &str, suit_dir: &Path, out: &Path, camera: Option<&PathBuf>) -> anyhow::Result<()> {
+    use suitcap::camera::Camera;
+    use suitcap::pipeline::PosePipeline;
+    let camera_path = match camera {
+        Some(path) => path.clone(),
+        None => {
+            let beside = Path::new(input).parent().map(|p| p.join("camera.toml"));
+            match beside.filter(|p| p.is_file()) {
+                Some(p) => p,
+                None => suit_dir.join("camera.toml"),
+            }
+        }
+    };
+    let camera = Camera::load(&camera_path)?;
+    let mut pipeline = PosePipeline::load(suit_dir)?;
+    let mut source = open_source(input, &SourceOptions::default())?;
+    if source.size() != (camera.intrinsics.width, camera.intrinsics.height) {
+        bail!(
+            "{input} is {}x{}, but {} is calibrated for {}x{}",
+            source.size().0,
+            source.size().1,
+            camera_path.display(),
+            camera.intrinsics.width,
+            camera.intrinsics.height
+        );
+    }
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let fps = source.frame_rate().unwrap_or(30.0);
+    let mut take = suitcap::bvh::Motion::new(
+        pipeline.regressor.skeleton.skeleton.clone(),
+        1.0 / fps,
+        Vec::new(),
+    )?;
+    let mut rows = String::from("frame,person,markers,segment_ms,describe_ms,regress_ms\n");
+    let (mut skipped, mut nobody, mut times) = (Vec::new(), 0usize, Vec::new());
+    let bar = indicatif::ProgressBar::new_spinner();
+    loop {
+        let frame = match source.next_frame() {
+            Ok(Some(frame)) => frame,
+            Ok(None) => break,
+            Err(e @ (SourceError::CorruptFrame { .. } | SourceError::SizeMismatch { .. })) => {
+                skipped.push(e.to_string());
+                continue;
+            }
+            Err(e) => {
+                eprintln!("stopped after {} frames: {e}", take.frame_count());
+                break;
+            }
+        };
+        let result = pipeline.process(&frame.image, &camera, None);
+        take.push_frame(&result.frame)?;
+        nobody += (!result.person) as usize;
+        let t = result.times;
+        times.push(t.segment + t.describe + t.regress);
+        rows.push_str(&format!(
+            "{},{},{},{:.3},{:.3},{:.3}\n",
+            frame.index, result.person as u8, result.markers, t.segment, t.describe, t.regress
+        ));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let bvh = out.join("take.bvh");
+    take.write(&bvh)?;
+    suitcap::io::write_atomic(&out.join("frames.csv"), rows.as_bytes())
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    times.sort_by(f64::total_cmp);
+    println!(
+        "{} frames → {} ({nobody} frames with nobody: previous pose kept, flagged in frames.csv); {} corrupt frames skipped; median {:.2} ms per frame (segment + describe + regress)",
+        take.frame_count(),
+        bvh.display(),
+        skipped.len(),
+        times.get(times.len() / 2).copied().unwrap_or(0.0)
+    );
+    for s in &skipped {
+        println!("  skipped: {s}");
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -521,6 +613,12 @@ fn main() -> ExitCode {
             fps,
         } => capture(input, out, *frames, *size, *fps),
         Command::Check { suit, data } => check(suit, data.as_ref()),
+        Command::Run {
+            input,
+            suit,
+            out,
+            camera,
+        } => run(input, suit, out, camera.as_ref()),
         Command::Describe {
             suit,
             input,
