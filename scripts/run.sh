@@ -13,9 +13,13 @@ case "${1:-}" in
     ./target/release/suitcap-synth --bvh tests/data/mocap/cmu_10_03_kick_ball.bvh --frames 75 \
       --size 640x480 --seed 1 --out out/synth --overwrite
     ./target/release/suitcap check --suit suits/default --data out/synth
-    echo "frames: out/synth/frames/  masks: out/synth/masks/  ground truth: out/synth/motion.bvh, markers.csv"
+    ./target/release/suitcap run out/synth/frames --suit suits/default --out out/pose
+    ./target/release/suitcap-train eval --suit suits/default --data out/synth
+    echo "frames: out/synth/frames/  ground truth: out/synth/motion.bvh  estimated pose: out/pose/take.bvh"
     ;;
   test)
+    # The runtime's integration tests drive the generator binary too: build every binary first.
+    cargo build --release --workspace
     cargo test --workspace --release
     ;;
   *)

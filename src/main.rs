@@ -234,6 +234,28 @@ fn check(suit: &PathBuf, data: Option<&PathBuf>) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// For a frame directory, the PNG name each input frame's output gets (its file stem); `None` for
+/// other inputs, whose outputs are numbered.
+fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
+    if !Path::new(input).is_dir() {
+        return Ok(None);
+    }
+    let files = list_frame_files(Path::new(input))?;
+    Ok(Some(
+        files
+            .iter()
+            .map(|f| {
+                format!(
+                    "{}.png",
+                    f.file_stem()
+                        .map(|s| s.to_string_lossy())
+                        .unwrap_or_default()
+                )
+            })
+            .collect(),
+    ))
+}
+
 fn segment(
     suit_dir: &Path,
     input: &str,
@@ -257,24 +279,7 @@ fn segment(
         tables.weights = suitcap::segment::Weights::from_array(array);
     }
     let mut segmenter = Segmenter::new(tables, &suit, SegmenterOptions::default());
-    let names: Option<Vec<String>> = if Path::new(input).is_dir() {
-        let files = list_frame_files(Path::new(input))?;
-        Some(
-            files
-                .iter()
-                .map(|f| {
-                    format!(
-                        "{}.png",
-                        f.file_stem()
-                            .map(|s| s.to_string_lossy())
-                            .unwrap_or_default()
-                    )
-                })
-                .collect(),
-        )
-    } else {
-        None
-    };
+    let names = output_names(input)?;
     let mut source = open_source(input, &SourceOptions::default())?;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let (mut frames, mut skipped) = (0usize, Vec::new());
@@ -401,24 +406,7 @@ fn describe(
         }
         None => None,
     };
-    let names: Option<Vec<String>> = if Path::new(input).is_dir() {
-        let files = list_frame_files(Path::new(input))?;
-        Some(
-            files
-                .iter()
-                .map(|f| {
-                    format!(
-                        "{}.png",
-                        f.file_stem()
-                            .map(|s| s.to_string_lossy())
-                            .unwrap_or_default()
-                    )
-                })
-                .collect(),
-        )
-    } else {
-        None
-    };
+    let names = output_names(input)?;
     let mut source = open_source(input, &SourceOptions::default())?;
     let mut describer = Describer::new(&suit);
     let mut rows = String::new();

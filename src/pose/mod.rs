@@ -10,6 +10,7 @@
 //! say, through the intrinsics. Decoding rescales each (sin, cos) pair to unit length before `atan2`.
 //! The joints the suit does not estimate keep the values of a template frame.
 
+pub mod chart;
 pub mod eval;
 pub mod regressor;
 pub mod rvm;

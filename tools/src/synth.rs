@@ -181,7 +181,15 @@ fn to_f32(image: &RgbImage) -> Vec<[f32; 3]> {
     image.pixels().map(|p| p.0.map(f32::from)).collect()
 }
 
-fn write_png_rgb(path: &Path, image: &RgbImage) -> anyhow::Result<()> {
+/// Writes 8-bit pixels (`colour` says RGB or grey) as a PNG with fast compression: the generator's
+/// frames are large and many, and writing them is a noticeable part of a run.
+fn write_png(
+    path: &Path,
+    pixels: &[u8],
+    width: u32,
+    height: u32,
+    colour: image::ExtendedColorType,
+) -> anyhow::Result<()> {
     let file =
         std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
     let encoder = PngEncoder::new_with_quality(
@@ -190,30 +198,7 @@ fn write_png_rgb(path: &Path, image: &RgbImage) -> anyhow::Result<()> {
         FilterType::Sub,
     );
     encoder
-        .write_image(
-            image.as_raw(),
-            image.width(),
-            image.height(),
-            image::ExtendedColorType::Rgb8,
-        )
-        .with_context(|| format!("cannot write {}", path.display()))
-}
-
-fn write_png_gray(path: &Path, image: &image::GrayImage) -> anyhow::Result<()> {
-    let file =
-        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let encoder = PngEncoder::new_with_quality(
-        std::io::BufWriter::new(file),
-        CompressionType::Fast,
-        FilterType::Sub,
-    );
-    encoder
-        .write_image(
-            image.as_raw(),
-            image.width(),
-            image.height(),
-            image::ExtendedColorType::L8,
-        )
+        .write_image(pixels, width, height, colour)
         .with_context(|| format!("cannot write {}", path.display()))
 }
 
@@ -422,8 +407,20 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
                     options.seed.wrapping_mul(0x9E37).wrapping_add(k as u64),
                 ));
                 let image = compose(background, layer, &sensor, &mut frame_rng, scratch);
-                write_png_rgb(&dataset::frame_path(out, k), &image)?;
-                write_png_gray(&dataset::mask_path(out, k), &layer.mask())?;
+                write_png(
+                    &dataset::frame_path(out, k),
+                    image.as_raw(),
+                    w,
+                    h,
+                    image::ExtendedColorType::Rgb8,
+                )?;
+                write_png(
+                    &dataset::mask_path(out, k),
+                    layer.mask().as_raw(),
+                    w,
+                    h,
+                    image::ExtendedColorType::L8,
+                )?;
                 let markers = renderer
                     .visible_markers(world, layer)
                     .into_iter()

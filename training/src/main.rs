@@ -6,7 +6,7 @@
 //! `suit` trains a whole suit (every stage the suit directory lacks, then the RVM pose regressor);
 //! `eval` measures a trained suit's joint-angle error on datasets with ground truth.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{bail, Context};
@@ -80,6 +80,24 @@ enum Command {
         /// Kernel width; default: chosen on held-back frames among ¼, ½, 1 and 2 × the median distance.
         #[arg(long)]
         width: Option<f32>,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// The source paper's experiments on one trained suit's segmenter and codebooks: regressors for
+    /// the FC, HOG, FC+HOG(+box) and silhouette descriptors with S candidate basis functions each,
+    /// trained on --train and measured on --data (segmenter masks). Writes OUT/experiments.csv and a
+    /// bar chart OUT/experiments.svg.
+    Experiments {
+        #[arg(long)]
+        suit: PathBuf,
+        #[arg(long, required = true)]
+        train: Vec<PathBuf>,
+        #[arg(long, required = true)]
+        data: Vec<PathBuf>,
+        #[arg(long, value_delimiter = ',', default_value = "512,768,1024,1500")]
+        basis: Vec<usize>,
+        #[arg(long)]
+        out: PathBuf,
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
@@ -308,6 +326,97 @@ fn pose_vector_error(rvm: &suitcap::pose::rvm::Rvm, x: &[f32], y: &[f32], output
     total / count.max(1) as f64
 }
 
+/// Descriptors and pose vectors of training datasets, every tenth frame held back.
+struct TrainingData {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    held_x: Vec<f32>,
+    held_y: Vec<f32>,
+    dim: usize,
+    outputs: usize,
+}
+
+impl TrainingData {
+    fn collect(
+        suit: &SuitDefinition,
+        codebooks: &suitcap::descriptor::Codebooks,
+        data: &[PathBuf],
+        kind: suitcap::descriptor::DescriptorKind,
+    ) -> anyhow::Result<TrainingData> {
+        let dim = kind.len();
+        let mut set = TrainingData {
+            x: Vec::new(),
+            y: Vec::new(),
+            held_x: Vec::new(),
+            held_y: Vec::new(),
+            dim,
+            outputs: 0,
+        };
+        for dir in data {
+            let dataset = Dataset::open(dir)?;
+            let (x, y, n) = training_set(&dataset, suit, codebooks, kind)?;
+            if n == 0 {
+                continue;
+            }
+            set.outputs = y.len() / n;
+            for (k, (xi, yi)) in x
+                .chunks_exact(dim)
+                .zip(y.chunks_exact(set.outputs))
+                .enumerate()
+            {
+                let (tx, ty) = if k % 10 == 9 {
+                    (&mut set.held_x, &mut set.held_y)
+                } else {
+                    (&mut set.x, &mut set.y)
+                };
+                tx.extend_from_slice(xi);
+                ty.extend_from_slice(yi);
+            }
+        }
+        if set.x.len() / dim < 10 {
+            bail!(
+                "only {} training frames with a person in {} datasets",
+                set.x.len() / dim,
+                data.len()
+            );
+        }
+        Ok(set)
+    }
+
+    fn frames(&self) -> usize {
+        (self.x.len() + self.held_x.len()) / self.dim
+    }
+
+    /// The kernel width among ¼, ½, 1 and 2 × the median descriptor distance with the lowest angle
+    /// error on the held-back frames (models with at most 500 candidates, for speed).
+    fn choose_width(&self, basis: usize, seed: u64) -> anyhow::Result<f32> {
+        use suitcap::pose::rvm::{median_distance, Rvm, TrainOptions};
+        let n = self.x.len() / self.dim;
+        let median = median_distance(&self.x, n, self.dim, seed);
+        let mut best = (f64::INFINITY, median);
+        for factor in [0.25f32, 0.5, 1.0, 2.0] {
+            let w = median * factor;
+            let options = TrainOptions {
+                basis: basis.min(500),
+                width: w,
+                max_iterations: 2000,
+                tolerance: 1e-3,
+                seed,
+            };
+            let (rvm, report) = Rvm::train(&self.x, n, self.dim, &self.y, self.outputs, &options)?;
+            let error = pose_vector_error(&rvm, &self.held_x, &self.held_y, self.outputs);
+            println!(
+                "  width {w:.4} ({factor} × median): {} relevance vectors, held-back angle error {error:.2}°",
+                report.relevance_vectors
+            );
+            if error < best.0 {
+                best = (error, w);
+            }
+        }
+        Ok(best.1)
+    }
+}
+
 fn train_suit(
     suit_dir: &PathBuf,
     data: &[PathBuf],
@@ -318,7 +427,7 @@ fn train_suit(
 ) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap::pose::regressor::Regressor;
-    use suitcap::pose::rvm::{median_distance, Rvm, TrainOptions};
+    use suitcap::pose::rvm::{Rvm, TrainOptions};
     let started = std::time::Instant::now();
     let mut kind = DescriptorKind::parse(descriptor)
         .with_context(|| format!("--descriptor '{descriptor}'"))?;
@@ -352,66 +461,14 @@ fn train_suit(
         }
     };
     println!("stage 3/3: RVM regressor on the {} descriptor", kind.name());
-    let (mut train_x, mut train_y, mut held_x, mut held_y) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let mut outputs = 0;
-    let mut total = 0;
-    for dir in data {
-        let dataset = Dataset::open(dir)?;
-        let (x, y, n) = training_set(&dataset, &suit, &codebooks, kind)?;
-        if n == 0 {
-            continue;
-        }
-        outputs = y.len() / n;
-        // Every tenth frame is held back to choose the kernel width.
-        for (k, (xi, yi)) in x
-            .chunks_exact(kind.len())
-            .zip(y.chunks_exact(outputs))
-            .enumerate()
-        {
-            let (tx, ty) = if k % 10 == 9 {
-                (&mut held_x, &mut held_y)
-            } else {
-                (&mut train_x, &mut train_y)
-            };
-            tx.extend_from_slice(xi);
-            ty.extend_from_slice(yi);
-        }
-        total += n;
-    }
-    let dim = kind.len();
-    let n_train = train_x.len() / dim;
-    if n_train < 10 {
-        bail!(
-            "only {n_train} training frames with a person in {} datasets",
-            data.len()
-        );
-    }
-    let median = median_distance(&train_x, n_train, dim, seed);
+    let set = TrainingData::collect(&suit, &codebooks, data, kind)?;
+    let total = set.frames();
     let width = match width {
         Some(w) => w,
-        None => {
-            let mut best = (f64::INFINITY, median);
-            for factor in [0.25f32, 0.5, 1.0, 2.0] {
-                let w = median * factor;
-                let options = TrainOptions {
-                    basis: basis.min(500),
-                    width: w,
-                    max_iterations: 2000,
-                    tolerance: 1e-3,
-                    seed,
-                };
-                let (rvm, report) =
-                    Rvm::train(&train_x, n_train, dim, &train_y, outputs, &options)?;
-                let error = pose_vector_error(&rvm, &held_x, &held_y, outputs);
-                println!("  width {w:.4} ({factor} × median): {} relevance vectors, held-back angle error {error:.2}°", report.relevance_vectors);
-                if error < best.0 {
-                    best = (error, w);
-                }
-            }
-            best.1
-        }
+        None => set.choose_width(basis, seed)?,
     };
+    let (mut train_x, mut train_y, held_x, held_y, dim, outputs) =
+        (set.x, set.y, set.held_x, set.held_y, set.dim, set.outputs);
     // Final model on every frame.
     train_x.extend_from_slice(&held_x);
     train_y.extend_from_slice(&held_y);
@@ -478,13 +535,16 @@ fn train_suit(
     Ok(())
 }
 
-fn eval(
-    suit_dir: &PathBuf,
+/// Per-dataset results of an evaluation: (dataset, mean Euler error, mean geodesic error, frames).
+type DatasetErrors = Vec<(String, f64, f64, usize)>;
+
+/// Runs a trained suit over datasets with ground truth and accumulates the joint errors.
+fn evaluate(
+    suit_dir: &Path,
     data: &[PathBuf],
     truth_masks: bool,
-    csv: Option<&PathBuf>,
-    json: Option<&PathBuf>,
-) -> anyhow::Result<()> {
+    verbose: bool,
+) -> anyhow::Result<(suitcap::pose::eval::JointErrors, DatasetErrors)> {
     use suitcap::pipeline::PosePipeline;
     use suitcap::pose::eval::JointErrors;
     let mut pipeline = PosePipeline::load(suit_dir)?;
@@ -513,10 +573,18 @@ fn eval(
             }
             errors.add(&layout, dataset.motion.frame(index), &result.frame);
         }
-        println!(
-            "{}: {} frames ({} with nobody found), clip {}, subject {}: mean joint angle error {:.2}° (Euler), {:.2}° (geodesic)",
-            dir.display(), dataset.frame_count(), missed, dataset.manifest.clip.name, dataset.manifest.subject.name, errors.mean_euler(), errors.mean_geodesic()
-        );
+        if verbose {
+            println!(
+                "{}: {} frames ({} with nobody found), clip {}, subject {}: mean joint angle error {:.2}° (Euler), {:.2}° (geodesic)",
+                dir.display(),
+                dataset.frame_count(),
+                missed,
+                dataset.manifest.clip.name,
+                dataset.manifest.subject.name,
+                errors.mean_euler(),
+                errors.mean_geodesic()
+            );
+        }
         all.merge(&errors);
         per_dataset.push((
             dir.display().to_string(),
@@ -525,6 +593,18 @@ fn eval(
             errors.frames,
         ));
     }
+    Ok((all, per_dataset))
+}
+
+fn eval(
+    suit_dir: &PathBuf,
+    data: &[PathBuf],
+    truth_masks: bool,
+    csv: Option<&PathBuf>,
+    json: Option<&PathBuf>,
+) -> anyhow::Result<()> {
+    let (all, per_dataset) = evaluate(suit_dir, data, truth_masks, true)?;
+    let names = all.names.clone();
     println!("{:<18} {:>9} {:>9}", "joint", "Euler °", "geodesic °");
     for (j, name) in names.iter().enumerate() {
         println!("{name:<18} {:>9.2} {:>9.2}", all.euler(j), all.geodesic(j));
@@ -576,6 +656,129 @@ fn eval(
     Ok(())
 }
 
+fn experiments(
+    suit_dir: &Path,
+    train: &[PathBuf],
+    data: &[PathBuf],
+    bases: &[usize],
+    out: &Path,
+    seed: u64,
+) -> anyhow::Result<()> {
+    use suitcap::descriptor::{Codebooks, DescriptorKind};
+    use suitcap::pose::regressor::Regressor;
+    use suitcap::pose::rvm::{Rvm, TrainOptions};
+    let suit = SuitDefinition::load_dir(suit_dir)?;
+    let codebooks = Codebooks::load(suit_dir)?;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let template_data = Dataset::open(train.first().context("no --train")?)?;
+    let template = suitcap::bvh::Motion::new(
+        template_data.motion.skeleton.clone(),
+        template_data.motion.frame_time,
+        template_data.motion.frame(0).to_vec(),
+    )?;
+    let layout = suitcap::pose::PoseLayout::new(&suit.skeleton, &template.skeleton)?;
+    let mut csv = String::from(
+        "descriptor,basis,relevance_vectors,train_seconds,mean_euler_deg,mean_geodesic_deg",
+    );
+    for j in &suit.skeleton.joints {
+        csv.push_str(&format!(",{}", j.name));
+    }
+    csv.push('\n');
+    let mut results: Vec<(DescriptorKind, usize, Vec<f64>, f64)> = Vec::new();
+    for kind in [
+        DescriptorKind::Fc,
+        DescriptorKind::Hog,
+        DescriptorKind::Full,
+        DescriptorKind::Silhouette,
+    ] {
+        println!("{}:", kind.name());
+        let set = TrainingData::collect(&suit, &codebooks, train, kind)?;
+        let width = set.choose_width(512, seed)?;
+        let (mut x, mut y) = (set.x.clone(), set.y.clone());
+        x.extend_from_slice(&set.held_x);
+        y.extend_from_slice(&set.held_y);
+        let n = x.len() / set.dim;
+        for &basis in bases {
+            let options = TrainOptions {
+                basis,
+                width,
+                max_iterations: 5000,
+                tolerance: 1e-3,
+                seed,
+            };
+            let (rvm, report) = Rvm::train(&x, n, set.dim, &y, set.outputs, &options)?;
+            let variant = out.join(format!("{}-{basis}", kind.name().replace('+', "_")));
+            std::fs::create_dir_all(&variant)
+                .with_context(|| format!("cannot create {}", variant.display()))?;
+            for name in [
+                "suit.toml",
+                suitcap::segment::tables::SEGMENTER_FILE,
+                "codebook_fc.bin",
+                "codebook_hog.bin",
+                "codebook_silhouette.bin",
+            ] {
+                std::fs::copy(suit_dir.join(name), variant.join(name))
+                    .with_context(|| format!("cannot copy {name}"))?;
+            }
+            Regressor {
+                rvm,
+                descriptor: kind,
+                skeleton: template.clone(),
+                layout: layout.clone(),
+            }
+            .save(&variant)?;
+            let (errors, _) = evaluate(&variant, data, false, false)?;
+            println!(
+                "  S = {basis}: {} relevance vectors ({:.1} s), mean joint angle error {:.2}° (Euler), {:.2}° (geodesic)",
+                report.relevance_vectors,
+                report.seconds,
+                errors.mean_euler(),
+                errors.mean_geodesic()
+            );
+            csv.push_str(&format!(
+                "{},{basis},{},{:.2},{:.3},{:.3}",
+                kind.name(),
+                report.relevance_vectors,
+                report.seconds,
+                errors.mean_euler(),
+                errors.mean_geodesic()
+            ));
+            let per_joint: Vec<f64> = (0..errors.names.len()).map(|j| errors.euler(j)).collect();
+            for e in &per_joint {
+                csv.push_str(&format!(",{e:.3}"));
+            }
+            csv.push('\n');
+            results.push((kind, basis, per_joint, errors.mean_euler()));
+        }
+    }
+    suitcap::io::write_atomic(&out.join("experiments.csv"), csv.as_bytes())
+        .context("cannot write experiments.csv")?;
+    let names: Vec<String> = suit
+        .skeleton
+        .joints
+        .iter()
+        .map(|j| j.name.clone())
+        .collect();
+    let largest = bases.iter().copied().max().unwrap_or(0);
+    let chart = suitcap::pose::chart::bar_chart_svg(
+        &format!("Mean joint angle error (°, Euler) with S = {largest}"),
+        &names,
+        &results
+            .iter()
+            .filter(|r| r.1 == largest)
+            .map(|r| (r.0.name().to_string(), r.2.clone(), r.3))
+            .collect::<Vec<_>>(),
+    );
+    suitcap::io::write_atomic(&out.join("experiments.svg"), chart.as_bytes())
+        .context("cannot write experiments.svg")?;
+    println!(
+        "written {} and {}",
+        out.join("experiments.csv").display(),
+        out.join("experiments.svg").display()
+    );
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -601,6 +804,14 @@ fn main() -> ExitCode {
             width,
             seed,
         } => train_suit(suit, data, *basis, descriptor, *width, *seed),
+        Command::Experiments {
+            suit,
+            train,
+            data,
+            basis,
+            out,
+            seed,
+        } => experiments(suit, train, data, basis, out, *seed),
         Command::Eval {
             suit,
             data,

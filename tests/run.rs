@@ -1,0 +1,115 @@
+//! The runtime binary end to end with the shipped default suit: a generated clip in, a BVH take out,
+//! one BVH frame per input frame, readable again; and clear errors for a broken model.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn repo(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+/// Renders a 12-frame dataset with the workspace's `suitcap-synth` binary (the tools crate depends on
+/// this one, so its library is not reachable from here; the test command builds the workspace first).
+fn generated_clip(dir: &Path) -> PathBuf {
+    let synth = Path::new(env!("CARGO_BIN_EXE_suitcap")).with_file_name("suitcap-synth");
+    let status = Command::new(&synth)
+        .args([
+            "--bvh",
+            repo("tests/data/mocap/cmu_13_39_jump.bvh")
+                .to_str()
+                .expect("utf-8 path"),
+        ])
+        .args(["--frames", "12", "--seed", "3", "--out"])
+        .arg(dir)
+        .status();
+    match status {
+        Ok(s) if s.success() => dir.to_owned(),
+        _ => panic!(
+            "cannot run {} (build the workspace: cargo test --workspace)",
+            synth.display()
+        ),
+    }
+}
+
+#[test]
+fn run_writes_one_bvh_frame_per_input_frame() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let data = generated_clip(&tmp.path().join("clip"));
+    let out = tmp.path().join("out");
+    let output = Command::new(env!("CARGO_BIN_EXE_suitcap"))
+        .args(["run"])
+        .arg(data.join("frames"))
+        .args([
+            "--suit",
+            repo("suits/default").to_str().expect("utf-8 path"),
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let take = suitcap::bvh::Motion::load(&out.join("take.bvh")).expect("a valid BVH");
+    assert_eq!(take.frame_count(), 12);
+    assert!((take.frame_rate() - 30.0).abs() < 1e-3);
+    let rows = std::fs::read_to_string(out.join("frames.csv")).expect("frames.csv");
+    assert_eq!(rows.lines().count(), 13);
+    // The estimated angles are close to the truth on this clip (a loose bound: the regressor's
+    // measured error is in the README).
+    let truth = suitcap::bvh::Motion::load(&data.join("motion.bvh")).expect("truth");
+    let suit = suitcap::suit::SuitDefinition::load_dir(&repo("suits/default")).expect("suit");
+    let layout = suitcap::pose::PoseLayout::new(&suit.skeleton, &truth.skeleton).expect("layout");
+    let mut errors = suitcap::pose::eval::JointErrors::new(
+        suit.skeleton
+            .joints
+            .iter()
+            .map(|j| j.name.clone())
+            .collect(),
+    );
+    for k in 0..12 {
+        errors.add(&layout, truth.frame(k), take.frame(k));
+    }
+    assert!(
+        errors.mean_euler() < 30.0,
+        "mean error {:.1}°",
+        errors.mean_euler()
+    );
+}
+
+#[test]
+fn a_truncated_model_file_is_a_clear_error() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let suit = tmp.path().join("suit");
+    std::fs::create_dir(&suit).expect("mkdir");
+    for name in [
+        "suit.toml",
+        "segmenter.bin",
+        "codebook_fc.bin",
+        "codebook_hog.bin",
+        "codebook_silhouette.bin",
+        "skeleton.bvh",
+    ] {
+        std::fs::copy(repo("suits/default").join(name), suit.join(name)).expect("copy");
+    }
+    let bytes = std::fs::read(repo("suits/default/regressor.bin")).expect("read");
+    std::fs::write(suit.join("regressor.bin"), &bytes[..bytes.len() / 3]).expect("write");
+    let data = generated_clip(&tmp.path().join("clip"));
+    let output = Command::new(env!("CARGO_BIN_EXE_suitcap"))
+        .args(["run"])
+        .arg(data.join("frames"))
+        .arg("--suit")
+        .arg(&suit)
+        .arg("--out")
+        .arg(tmp.path().join("out"))
+        .output()
+        .expect("runs");
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("regressor.bin") && stderr.contains("truncated"),
+        "{stderr}"
+    );
+}
