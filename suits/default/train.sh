@@ -3,6 +3,7 @@
 #   suits/default/train.sh [WORK_DIR]
 # 1. renders one synthetic dataset per clip (640x480, 30 fps, subjects and backgrounds from fixed seeds,
 #    bundled backgrounds in tests/data/backgrounds) into WORK_DIR (default: a temporary directory);
+#    21 clips, about 5,500 frames, about 2.5 minutes on a 2-core machine;
 # 2. suitcap-train suit: segmenter tables (20 frames of the first dataset), codebooks, RVM regressor,
 #    written into suits/default/.
 set -euo pipefail
