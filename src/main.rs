@@ -234,6 +234,29 @@ fn check(suit: &PathBuf, data: Option<&PathBuf>) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The next frame that decodes. A corrupt or mis-sized frame is reported, recorded in `skipped` and
+/// passed over; the end of the stream or any other error (reported, with the `done` frames so far)
+/// gives `None`.
+fn next_good_frame(
+    source: &mut (dyn suitcap::source::FrameSource + Send),
+    skipped: &mut Vec<String>,
+    done: usize,
+) -> Option<suitcap::source::Frame> {
+    loop {
+        match source.next_frame() {
+            Ok(frame) => return frame,
+            Err(e @ (SourceError::CorruptFrame { .. } | SourceError::SizeMismatch { .. })) => {
+                eprintln!("skipped: {e}");
+                skipped.push(e.to_string());
+            }
+            Err(e) => {
+                eprintln!("stopped after {done} frames: {e}");
+                return None;
+            }
+        }
+    }
+}
+
 /// For a frame directory, the PNG name each input frame's output gets (its file stem); `None` for
 /// other inputs, whose outputs are numbered.
 fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
@@ -288,20 +311,13 @@ fn segment(
     let (mut cleaned_frames, mut removed_px, mut filled_px, mut empty_frames) =
         (0usize, 0usize, 0usize, 0usize);
     loop {
-        let frame = match source.next_frame() {
-            Ok(Some(frame)) => frame,
-            Ok(None) => break,
-            Err(e @ (SourceError::CorruptFrame { .. } | SourceError::SizeMismatch { .. })) => {
-                eprintln!("skipped: {e}");
-                skipped.push(e.to_string());
-                segmenter.reset();
-                continue;
-            }
-            Err(e) => {
-                eprintln!("stopped after {frames} frames: {e}");
-                break;
-            }
+        let before = skipped.len();
+        let Some(frame) = next_good_frame(source.as_mut(), &mut skipped, frames) else {
+            break;
         };
+        if skipped.len() > before {
+            segmenter.reset(); // the history no longer matches the picture
+        }
         let name = names
             .as_ref()
             .and_then(|n| n.get(frame.index as usize).cloned())
@@ -416,20 +432,12 @@ fn describe(
     }
     rows.push('\n');
     let mut marker_rows = String::from("frame,colour,x,y,area\n");
+    let mut skipped = Vec::new();
     let (mut frames, mut times, mut score, mut counts) =
         (0usize, Vec::new(), MarkerScore::default(), Vec::new());
     loop {
-        let frame = match source.next_frame() {
-            Ok(Some(frame)) => frame,
-            Ok(None) => break,
-            Err(e @ (SourceError::CorruptFrame { .. } | SourceError::SizeMismatch { .. })) => {
-                eprintln!("skipped: {e}");
-                continue;
-            }
-            Err(e) => {
-                eprintln!("stopped after {frames} frames: {e}");
-                break;
-            }
+        let Some(frame) = next_good_frame(source.as_mut(), &mut skipped, frames) else {
+            break;
         };
         let name = names
             .as_ref()
@@ -501,7 +509,7 @@ fn describe(
     times.sort_by(f64::total_cmp);
     let median = times.get(times.len() / 2).copied().unwrap_or(0.0);
     let mean_markers = counts.iter().sum::<usize>() as f64 / counts.len().max(1) as f64;
-    println!("{frames} {} descriptors ({} values) written to {}; median {median:.2} ms per frame, {mean_markers:.0} markers per frame", kind.name(), kind.len(), out.display());
+    println!("{frames} {} descriptors ({} values) written to {}; median {median:.2} ms per frame, {mean_markers:.0} markers per frame; {} corrupt frames skipped", kind.name(), kind.len(), out.display(), skipped.len());
     if truth.is_some() {
         println!(
             "markers vs truth (≥ 60 % and ≥ 6 px visible): recall {:.4} ({} of {}), precision {:.4} ({} of {} detections)",
@@ -548,17 +556,8 @@ fn run(input: &str, suit_dir: &Path, out: &Path, camera: Option<&PathBuf>) -> an
     let (mut skipped, mut nobody, mut times) = (Vec::new(), 0usize, Vec::new());
     let bar = indicatif::ProgressBar::new_spinner();
     loop {
-        let frame = match source.next_frame() {
-            Ok(Some(frame)) => frame,
-            Ok(None) => break,
-            Err(e @ (SourceError::CorruptFrame { .. } | SourceError::SizeMismatch { .. })) => {
-                skipped.push(e.to_string());
-                continue;
-            }
-            Err(e) => {
-                eprintln!("stopped after {} frames: {e}", take.frame_count());
-                break;
-            }
+        let Some(frame) = next_good_frame(source.as_mut(), &mut skipped, take.frame_count()) else {
+            break;
         };
         let result = pipeline.process(&frame.image, &camera, None);
         take.push_frame(&result.frame)?;
