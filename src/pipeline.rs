@@ -49,6 +49,9 @@ pub struct PoseFrame {
     pub markers: usize,
     /// The regressed pose vector (empty when nobody was seen).
     pub pose: Vec<f32>,
+    /// Root position channels before the position correction, and the image shift it applied.
+    pub root_before_correction: [f32; 3],
+    pub correction: Option<glam::Vec2>,
     pub times: PoseTimes,
 }
 
@@ -61,6 +64,10 @@ pub struct PosePipeline {
     pub regressor: Regressor,
     last: Option<Vec<f32>>,
     pose: Vec<f32>,
+    correction_parts: Option<crate::pose::correction::CorrectionParts>,
+    lut: crate::segment::features::ColourLut,
+    /// Move the root onto the head, hand and shoe blobs (on by default).
+    pub position_correction: bool,
 }
 
 impl PosePipeline {
@@ -76,6 +83,7 @@ impl PosePipeline {
         let regressor = Regressor::load(suit_dir, &suit)?;
         let describer = Describer::new(&suit);
         let pose = vec![0.0; regressor.layout.len()];
+        let correction_parts = crate::pose::correction::CorrectionParts::new(&regressor.skeleton.skeleton);
         Ok(PosePipeline {
             suit,
             segmenter,
@@ -84,6 +92,9 @@ impl PosePipeline {
             regressor,
             last: None,
             pose,
+            correction_parts,
+            lut: crate::segment::features::ColourLut::new(),
+            position_correction: true,
         })
     }
 
@@ -113,12 +124,15 @@ impl PosePipeline {
                 .last
                 .clone()
                 .unwrap_or_else(|| self.regressor.template().to_vec());
+            let root_before_correction = self.regressor.layout.root_position.map(|c| frame[c]);
             return PoseFrame {
                 frame,
                 person: false,
                 mask,
                 markers: 0,
                 pose: Vec::new(),
+                root_before_correction,
+                correction: None,
                 times,
             };
         };
@@ -127,13 +141,34 @@ impl PosePipeline {
             .rvm
             .predict_into(&descriptor.values, &mut self.pose);
         let bbox = (x0 as f32, y0 as f32, x1 as f32, y1 as f32);
-        let frame = self.regressor.layout.decode(
+        let mut frame = self.regressor.layout.decode(
             &self.regressor.skeleton.skeleton,
             &self.pose,
             self.regressor.template(),
             camera,
             bbox,
         );
+        let root_before_correction = self.regressor.layout.root_position.map(|c| frame[c]);
+        let correction = match (&self.correction_parts, self.position_correction) {
+            (Some(parts), true) => {
+                let landmarks = crate::pose::correction::find_landmarks(image, &mask, &self.lut);
+                crate::pose::correction::correct_root(
+                    &mut frame,
+                    &self.regressor.skeleton.skeleton,
+                    self.regressor.layout.root_position,
+                    parts,
+                    camera,
+                    &landmarks,
+                    (y1 - y0) as f32,
+                    crate::pose::correction::depth_from_markers(
+                        &markers.iter().map(|m| m.centre).collect::<Vec<_>>(),
+                        self.suit.pitch_cm(),
+                        camera.intrinsics.fy,
+                    ),
+                )
+            }
+            _ => None,
+        };
         times.regress = ms(started);
         self.last = Some(frame.clone());
         PoseFrame {
@@ -142,6 +177,8 @@ impl PosePipeline {
             mask,
             markers: markers.len(),
             pose: self.pose.clone(),
+            root_before_correction,
+            correction,
             times,
         }
     }

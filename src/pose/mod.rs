@@ -3,14 +3,16 @@
 //! For the suit's J estimated joints ([`PoseLayout`]) the vector holds, per joint, the sine and cosine of
 //! its three BVH rotation angles in the file's own channel order (6 values), then the root's image
 //! offset from the silhouette box's centre (2 values, in box heights) and its depth (1 value: camera
-//! depth × box height / focal length, which is about the person's height in world units and does not
-//! change with the distance): 6·J + 3 values (105 for the default suit's 17 joints). The root's
+//! depth × box height / focal length / [`DEPTH_SCALE`], which is about the person's height in metres
+//! and does not change with the distance; the scale keeps it in the range of the other values, which
+//! matters because the regressor shares one noise level across all outputs): 6·J + 3 values (105 for the default suit's 17 joints). The root's
 //! rotation is expressed relative to the camera, since that is what the image shows; decoding turns
 //! it back into the world with the camera's extrinsics and puts the root where the offset and depth
 //! say, through the intrinsics. Decoding rescales each (sin, cos) pair to unit length before `atan2`.
 //! The joints the suit does not estimate keep the values of a template frame.
 
 pub mod chart;
+pub mod correction;
 pub mod eval;
 pub mod regressor;
 pub mod rvm;
@@ -85,6 +87,9 @@ pub enum LayoutError {
     #[error("the suit's first joint '{0}' is not the BVH root")]
     Root(String),
 }
+
+/// World units (cm) per unit of the pose vector's depth value.
+pub const DEPTH_SCALE: f32 = 100.0;
 
 /// Length of a pose vector for `joints` joints.
 pub fn pose_len(joints: usize) -> usize {
@@ -179,7 +184,7 @@ impl PoseLayout {
                 out.extend_from_slice(&[
                     offset.x,
                     offset.y,
-                    p.depth * height / camera.intrinsics.fy,
+                    p.depth * height / camera.intrinsics.fy / DEPTH_SCALE,
                 ]);
             }
             None => out.extend_from_slice(&[0.0, 0.0, 0.0]),
@@ -220,7 +225,7 @@ impl PoseLayout {
         let j = 6 * self.joints.len();
         let (centre, height) = box_centre_height(bbox);
         let pixel = centre + Vec2::new(pose[j], pose[j + 1]) * height;
-        let depth = pose[j + 2] * camera.intrinsics.fy / height.max(1e-3);
+        let depth = pose[j + 2] * DEPTH_SCALE * camera.intrinsics.fy / height.max(1e-3);
         let world = camera.unproject(pixel, depth.max(1.0));
         let offset = skeleton.joint(0).offset;
         for (axis, &c) in self.root_position.iter().enumerate() {

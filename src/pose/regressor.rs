@@ -16,7 +16,8 @@ use crate::model::{ModelError, ModelFile};
 use crate::suit::SuitDefinition;
 
 pub const REGRESSOR_KIND: &str = "regressor";
-pub const REGRESSOR_VERSION: u32 = 1;
+/// Version 2: the pose vector's depth is in metres (`pose::DEPTH_SCALE`).
+pub const REGRESSOR_VERSION: u32 = 2;
 pub const REGRESSOR_FILE: &str = "regressor.bin";
 pub const SKELETON_FILE: &str = "skeleton.bvh";
 

@@ -557,6 +557,8 @@ fn evaluate(
         .collect();
     let mut all = JointErrors::new(names.clone());
     let mut per_dataset = Vec::new();
+    // Root position error sums (cm) before and after the position correction, frames, corrected frames.
+    let mut root = (0.0f64, 0.0f64, 0usize, 0usize);
     for dir in data {
         let dataset = Dataset::open(dir)?;
         let layout =
@@ -564,6 +566,9 @@ fn evaluate(
         pipeline.reset();
         let mut errors = JointErrors::new(names.clone());
         let mut missed = 0;
+        let root_of = |values: &[f32]| {
+            glam::Vec3::from_array(layout.root_position.map(|c| values[c])) + dataset.motion.skeleton.joint(0).offset
+        };
         for index in 0..dataset.frame_count() {
             let (image, mask) = frame_and_mask(&dataset, index)?;
             let result = pipeline.process(&image, &dataset.camera, truth_masks.then_some(&mask));
@@ -572,6 +577,14 @@ fn evaluate(
                 continue;
             }
             errors.add(&layout, dataset.motion.frame(index), &result.frame);
+            // The regressor's skeleton is one subject's; compare root positions in the world frame.
+            let truth_root = root_of(dataset.motion.frame(index));
+            let before = glam::Vec3::from_array(result.root_before_correction) + pipeline.regressor.skeleton.skeleton.joint(0).offset;
+            let after = root_of(&result.frame) - dataset.motion.skeleton.joint(0).offset + pipeline.regressor.skeleton.skeleton.joint(0).offset;
+            root.0 += before.distance(truth_root) as f64;
+            root.1 += after.distance(truth_root) as f64;
+            root.2 += 1;
+            root.3 += result.correction.is_some() as usize;
         }
         if verbose {
             println!(
@@ -592,6 +605,15 @@ fn evaluate(
             errors.mean_geodesic(),
             errors.frames,
         ));
+    }
+    if verbose && root.2 > 0 {
+        println!(
+            "root position error: {:.1} cm from the regressor alone, {:.1} cm after the position correction (head, hands and shoes by colour; {} of {} frames corrected)",
+            root.0 / root.2 as f64,
+            root.1 / root.2 as f64,
+            root.3,
+            root.2
+        );
     }
     Ok((all, per_dataset))
 }
