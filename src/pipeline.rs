@@ -83,7 +83,8 @@ impl PosePipeline {
         let regressor = Regressor::load(suit_dir, &suit)?;
         let describer = Describer::new(&suit);
         let pose = vec![0.0; regressor.layout.len()];
-        let correction_parts = crate::pose::correction::CorrectionParts::new(&regressor.skeleton.skeleton);
+        let correction_parts =
+            crate::pose::correction::CorrectionParts::new(&regressor.skeleton.skeleton);
         Ok(PosePipeline {
             suit,
             segmenter,

@@ -43,7 +43,9 @@ fn is_skin(hue: u8, sat: u8, val: u8) -> bool {
 
 /// Finds the head, hand and shoe blobs inside `mask`.
 pub fn find_landmarks(frame: &RgbImage, mask: &Mask, lut: &ColourLut) -> Landmarks {
-    let Some((x0, y0, x1, y1)) = mask.bounding_box() else { return Landmarks::default() };
+    let Some((x0, y0, x1, y1)) = mask.bounding_box() else {
+        return Landmarks::default();
+    };
     if frame.dimensions() != (mask.width(), mask.height()) {
         return Landmarks::default();
     }
@@ -77,14 +79,30 @@ pub fn find_landmarks(frame: &RgbImage, mask: &Mask, lut: &ColourLut) -> Landmar
             .iter()
             .zip(sums)
             .filter(|((count, _), _)| *count >= min_area)
-            .map(|((count, _), sum)| (sum / *count as f32 + Vec2::new(x0 as f32, y0 as f32), *count))
+            .map(|((count, _), sum)| {
+                (
+                    sum / *count as f32 + Vec2::new(x0 as f32, y0 as f32),
+                    *count,
+                )
+            })
             .collect()
     };
     let mut skin_blobs = blobs(&skin);
     skin_blobs.sort_by(|a, b| a.0.y.total_cmp(&b.0.y));
-    let head = skin_blobs.first().filter(|b| b.0.y < y0 as f32 + 0.35 * h as f32).map(|b| b.0);
-    let hands = skin_blobs.iter().skip(head.is_some() as usize).map(|b| b.0).collect();
-    let feet = blobs(&dark).into_iter().filter(|b| b.0.y > y0 as f32 + 0.66 * h as f32).map(|b| b.0).collect();
+    let head = skin_blobs
+        .first()
+        .filter(|b| b.0.y < y0 as f32 + 0.35 * h as f32)
+        .map(|b| b.0);
+    let hands = skin_blobs
+        .iter()
+        .skip(head.is_some() as usize)
+        .map(|b| b.0)
+        .collect();
+    let feet = blobs(&dark)
+        .into_iter()
+        .filter(|b| b.0.y > y0 as f32 + 0.66 * h as f32)
+        .map(|b| b.0)
+        .collect();
     Landmarks { head, hands, feet }
 }
 
@@ -136,8 +154,14 @@ impl CorrectionParts {
         let find = |name: &str| body.parts.iter().find(|p| p.name == name).cloned();
         Some(CorrectionParts {
             head: find("head"),
-            hands: ["right_hand", "left_hand"].iter().filter_map(|n| find(n)).collect(),
-            feet: ["right_foot", "left_foot"].iter().filter_map(|n| find(n)).collect(),
+            hands: ["right_hand", "left_hand"]
+                .iter()
+                .filter_map(|n| find(n))
+                .collect(),
+            feet: ["right_foot", "left_foot"]
+                .iter()
+                .filter_map(|n| find(n))
+                .collect(),
         })
     }
 }
@@ -175,8 +199,13 @@ pub fn correct_root(
     // (projected, observed) pixel pairs.
     let mut pairs: Vec<(Vec2, Vec2)> = Vec::new();
     let mut pair = |part: &BodyPart, candidates: &[Vec2]| {
-        let Some(p) = camera.project(centre(part, &world)) else { return };
-        if let Some(best) = candidates.iter().min_by(|a, b| a.distance(p.pixel).total_cmp(&b.distance(p.pixel))) {
+        let Some(p) = camera.project(centre(part, &world)) else {
+            return;
+        };
+        if let Some(best) = candidates
+            .iter()
+            .min_by(|a, b| a.distance(p.pixel).total_cmp(&b.distance(p.pixel)))
+        {
             if best.distance(p.pixel) <= reach {
                 pairs.push((p.pixel, *best));
             }
@@ -197,8 +226,13 @@ pub fn correct_root(
     let n = pairs.len() as f32;
     let centroid_projected = pairs.iter().map(|p| p.0).sum::<Vec2>() / n;
     let centroid_observed = pairs.iter().map(|p| p.1).sum::<Vec2>() / n;
-    let spread = |c: Vec2, pick: fn(&(Vec2, Vec2)) -> Vec2| pairs.iter().map(|p| pick(p).distance(c)).sum::<f32>() / n;
-    let (spread_projected, spread_observed) = (spread(centroid_projected, |p| p.0), spread(centroid_observed, |p| p.1));
+    let spread = |c: Vec2, pick: fn(&(Vec2, Vec2)) -> Vec2| {
+        pairs.iter().map(|p| pick(p).distance(c)).sum::<f32>() / n
+    };
+    let (spread_projected, spread_observed) = (
+        spread(centroid_projected, |p| p.0),
+        spread(centroid_observed, |p| p.1),
+    );
     let scale = if surface_depth.is_none() && spread_projected > 10.0 && spread_observed > 10.0 {
         (spread_observed / spread_projected).clamp(0.67, 1.5)
     } else {
@@ -225,7 +259,9 @@ mod tests {
     #[test]
     fn a_grid_of_markers_gives_its_depth() {
         // A 6 × 4 grid 14 px apart, pitch 7 cm, focal 600 px: depth = 600 · 7 / 14 = 300 cm.
-        let centres: Vec<Vec2> = (0..24).map(|i| Vec2::new((i % 6) as f32 * 14.0, (i / 6) as f32 * 14.0)).collect();
+        let centres: Vec<Vec2> = (0..24)
+            .map(|i| Vec2::new((i % 6) as f32 * 14.0, (i / 6) as f32 * 14.0))
+            .collect();
         let depth = depth_from_markers(&centres, 7.0, 600.0).expect("enough markers");
         assert!((depth - 300.0).abs() < 1e-3, "{depth}");
         assert!(depth_from_markers(&centres[..5], 7.0, 600.0).is_none());
@@ -247,7 +283,8 @@ mod tests {
     #[test]
     fn a_shifted_body_is_moved_back_onto_its_landmarks() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-        let motion = crate::bvh::Motion::load(&root.join("tests/data/mocap/cmu_09_01_run.bvh")).expect("clip");
+        let motion = crate::bvh::Motion::load(&root.join("tests/data/mocap/cmu_09_01_run.bvh"))
+            .expect("clip");
         let parts = CorrectionParts::new(&motion.skeleton).expect("parts");
         let camera = Camera::look_at(
             crate::camera::Intrinsics::from_fov(640, 480, 60.0),
@@ -270,15 +307,42 @@ mod tests {
         for (axis, amount, tolerance) in [(0usize, 8.0f32, 1.0f32), (2, -60.0, 6.0)] {
             let mut estimate = truth.clone();
             estimate[axis] += amount;
-            let shift = correct_root(&mut estimate, &motion.skeleton, [0, 1, 2], &parts, &camera, &landmarks, 300.0, None);
+            let shift = correct_root(
+                &mut estimate,
+                &motion.skeleton,
+                [0, 1, 2],
+                &parts,
+                &camera,
+                &landmarks,
+                300.0,
+                None,
+            );
             assert!(shift.is_some());
-            let error = Vec3::new(estimate[0] - truth[0], estimate[1] - truth[1], estimate[2] - truth[2]).length();
-            assert!(error < tolerance, "axis {axis}: root still {error:.2} cm off");
+            let error = Vec3::new(
+                estimate[0] - truth[0],
+                estimate[1] - truth[1],
+                estimate[2] - truth[2],
+            )
+            .length();
+            assert!(
+                error < tolerance,
+                "axis {axis}: root still {error:.2} cm off"
+            );
         }
         // Without landmarks nothing moves.
         let mut untouched = truth.clone();
         untouched[0] += 8.0;
-        assert!(correct_root(&mut untouched, &motion.skeleton, [0, 1, 2], &parts, &camera, &Landmarks::default(), 300.0, None).is_none());
+        assert!(correct_root(
+            &mut untouched,
+            &motion.skeleton,
+            [0, 1, 2],
+            &parts,
+            &camera,
+            &Landmarks::default(),
+            300.0,
+            None
+        )
+        .is_none());
         assert_eq!(untouched[0], truth[0] + 8.0);
     }
 }

@@ -567,7 +567,8 @@ fn evaluate(
         let mut errors = JointErrors::new(names.clone());
         let mut missed = 0;
         let root_of = |values: &[f32]| {
-            glam::Vec3::from_array(layout.root_position.map(|c| values[c])) + dataset.motion.skeleton.joint(0).offset
+            glam::Vec3::from_array(layout.root_position.map(|c| values[c]))
+                + dataset.motion.skeleton.joint(0).offset
         };
         for index in 0..dataset.frame_count() {
             let (image, mask) = frame_and_mask(&dataset, index)?;
@@ -579,8 +580,10 @@ fn evaluate(
             errors.add(&layout, dataset.motion.frame(index), &result.frame);
             // The regressor's skeleton is one subject's; compare root positions in the world frame.
             let truth_root = root_of(dataset.motion.frame(index));
-            let before = glam::Vec3::from_array(result.root_before_correction) + pipeline.regressor.skeleton.skeleton.joint(0).offset;
-            let after = root_of(&result.frame) - dataset.motion.skeleton.joint(0).offset + pipeline.regressor.skeleton.skeleton.joint(0).offset;
+            let before = glam::Vec3::from_array(result.root_before_correction)
+                + pipeline.regressor.skeleton.skeleton.joint(0).offset;
+            let after = root_of(&result.frame) - dataset.motion.skeleton.joint(0).offset
+                + pipeline.regressor.skeleton.skeleton.joint(0).offset;
             root.0 += before.distance(truth_root) as f64;
             root.1 += after.distance(truth_root) as f64;
             root.2 += 1;
