@@ -12,7 +12,7 @@ use glam::Vec2;
 use image::RgbImage;
 
 use crate::mask::Mask;
-use crate::segment::features::{ColourLut, PixelColour};
+use crate::segment::features::{ColourLut, MarkerGate, PixelColour};
 use crate::suit::SuitDefinition;
 
 /// Height assumed for the person when converting the silhouette's height to centimetres.
@@ -33,12 +33,10 @@ pub struct DetectedMarker {
 #[derive(Clone, Debug)]
 pub struct MarkerDetector {
     lut: ColourLut,
-    /// Marker colour index per quantised hue (256 steps), if any.
+    /// The suit's saturation/value gates and marker/cloth hue tests.
+    gate: MarkerGate,
+    /// Which marker colour (index) each quantised hue (256 steps) is nearest, when within tolerance.
     hue_colour: [Option<u8>; 256],
-    /// Is each quantised hue the cloth's?
-    cloth_hue: [bool; 256],
-    min_saturation: u8,
-    min_value: u8,
     marker_size_cm: f32,
     labels: Vec<u8>,
     stack: Vec<usize>,
@@ -64,16 +62,10 @@ impl MarkerDetector {
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .map(|(i, _)| i as u8)
         });
-        let cloth_hue = std::array::from_fn(|q| {
-            let hue = (q as f32 + 0.5) * 360.0 / 256.0;
-            crate::colour::hue_distance(hue, suit.background.hsv.hue) <= gates.hue_tolerance_deg
-        });
         MarkerDetector {
             lut: ColourLut::new(),
+            gate: MarkerGate::new(suit),
             hue_colour,
-            cloth_hue,
-            min_saturation: (gates.min_saturation * 255.0) as u8,
-            min_value: (gates.min_value * 255.0) as u8,
             marker_size_cm: suit.marker_size_cm,
             labels: Vec::new(),
             stack: Vec::new(),
@@ -83,20 +75,11 @@ impl MarkerDetector {
     /// The marker colour of a pixel, if it has one.
     #[inline]
     pub fn classify(&self, c: PixelColour) -> Option<u8> {
-        if c.chromatic && c.sat >= self.min_saturation && c.val >= self.min_value {
+        if self.gate.is_marker(c) {
             self.hue_colour[c.hue as usize]
         } else {
             None
         }
-    }
-
-    /// Does the pixel have the cloth's colour?
-    #[inline]
-    pub fn is_cloth(&self, c: PixelColour) -> bool {
-        c.chromatic
-            && c.sat >= self.min_saturation
-            && c.val >= self.min_value
-            && self.cloth_hue[c.hue as usize]
     }
 
     /// Area bounds (pixels) of a marker for a silhouette `height` pixels tall.
@@ -132,7 +115,7 @@ impl MarkerDetector {
                     let c = self.lut.get([raw[p], raw[p + 1], raw[p + 2]]);
                     match self.classify(c) {
                         Some(colour) => colour,
-                        None if self.is_cloth(c) => CLOTH,
+                        None if self.gate.is_cloth(c) => CLOTH,
                         None => NONE,
                     }
                 } else {

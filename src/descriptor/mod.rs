@@ -50,6 +50,15 @@ pub enum DescriptorKind {
 }
 
 impl DescriptorKind {
+    /// Every kind.
+    pub const ALL: [DescriptorKind; 5] = [
+        DescriptorKind::Fc,
+        DescriptorKind::Hog,
+        DescriptorKind::FcHog,
+        DescriptorKind::Full,
+        DescriptorKind::Silhouette,
+    ];
+
     pub fn len(self) -> usize {
         match self {
             DescriptorKind::Fc => FC_CENTRES,
@@ -327,13 +336,7 @@ mod tests {
     fn an_empty_mask_gives_a_zero_descriptor_flagged_no_person() {
         let (frame, _) = person();
         let mut describer = Describer::new(&suit());
-        for kind in [
-            DescriptorKind::Fc,
-            DescriptorKind::Hog,
-            DescriptorKind::FcHog,
-            DescriptorKind::Full,
-            DescriptorKind::Silhouette,
-        ] {
+        for kind in DescriptorKind::ALL {
             let (d, markers) =
                 describer.describe(&frame, &Mask::empty(100, 160), kind, &codebooks());
             assert!(!d.person);
@@ -366,13 +369,7 @@ mod tests {
 
     #[test]
     fn kinds_parse_by_name() {
-        for kind in [
-            DescriptorKind::Fc,
-            DescriptorKind::Hog,
-            DescriptorKind::FcHog,
-            DescriptorKind::Full,
-            DescriptorKind::Silhouette,
-        ] {
+        for kind in DescriptorKind::ALL {
             assert_eq!(DescriptorKind::parse(kind.name()), Some(kind));
         }
         assert_eq!(DescriptorKind::parse("full"), Some(DescriptorKind::Full));

@@ -55,15 +55,9 @@ fn kind_code(kind: DescriptorKind) -> f32 {
 }
 
 fn kind_from_code(code: f32) -> Option<DescriptorKind> {
-    [
-        DescriptorKind::Fc,
-        DescriptorKind::Hog,
-        DescriptorKind::FcHog,
-        DescriptorKind::Full,
-        DescriptorKind::Silhouette,
-    ]
-    .into_iter()
-    .find(|&k| kind_code(k) == code)
+    DescriptorKind::ALL
+        .into_iter()
+        .find(|&k| kind_code(k) == code)
 }
 
 impl Regressor {

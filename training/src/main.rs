@@ -306,8 +306,8 @@ fn training_set(
     Ok((x, y, n))
 }
 
-/// Mean Euler error (degrees) of predictions for `x` against pose vectors `y`, decoded on `motion`'s
-/// skeleton with a neutral camera (only the joint angles are compared).
+/// Mean absolute angle error (degrees) of predictions for `x` against pose vectors `y`, over every
+/// (sin, cos) pair (the root offset and depth are left out).
 fn pose_vector_error(rvm: &suitcap::pose::rvm::Rvm, x: &[f32], y: &[f32], outputs: usize) -> f64 {
     let dim = rvm.dim;
     let (mut total, mut count) = (0.0f64, 0usize);
@@ -383,6 +383,33 @@ impl TrainingData {
         Ok(set)
     }
 
+    /// The RVM on every frame, held-back ones included.
+    fn fit(
+        &self,
+        basis: usize,
+        width: f32,
+        seed: u64,
+    ) -> anyhow::Result<(suitcap::pose::rvm::Rvm, suitcap::pose::rvm::TrainReport)> {
+        use suitcap::pose::rvm::{Rvm, TrainOptions};
+        let x = [self.x.as_slice(), &self.held_x].concat();
+        let y = [self.y.as_slice(), &self.held_y].concat();
+        let options = TrainOptions {
+            basis,
+            width,
+            max_iterations: 5000,
+            tolerance: 1e-3,
+            seed,
+        };
+        Ok(Rvm::train(
+            &x,
+            x.len() / self.dim,
+            self.dim,
+            &y,
+            self.outputs,
+            &options,
+        )?)
+    }
+
     fn frames(&self) -> usize {
         (self.x.len() + self.held_x.len()) / self.dim
     }
@@ -427,7 +454,6 @@ fn train_suit(
 ) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap::pose::regressor::Regressor;
-    use suitcap::pose::rvm::{Rvm, TrainOptions};
     let started = std::time::Instant::now();
     let mut kind = DescriptorKind::parse(descriptor)
         .with_context(|| format!("--descriptor '{descriptor}'"))?;
@@ -467,20 +493,7 @@ fn train_suit(
         Some(w) => w,
         None => set.choose_width(basis, seed)?,
     };
-    let (mut train_x, mut train_y, held_x, held_y, dim, outputs) =
-        (set.x, set.y, set.held_x, set.held_y, set.dim, set.outputs);
-    // Final model on every frame.
-    train_x.extend_from_slice(&held_x);
-    train_y.extend_from_slice(&held_y);
-    let n = train_x.len() / dim;
-    let options = TrainOptions {
-        basis,
-        width,
-        max_iterations: 5000,
-        tolerance: 1e-3,
-        seed,
-    };
-    let (rvm, report) = Rvm::train(&train_x, n, dim, &train_y, outputs, &options)?;
+    let (rvm, report) = set.fit(basis, width, seed)?;
     let first_dataset = Dataset::open(first)?;
     let template = suitcap::bvh::Motion::new(
         first_dataset.motion.skeleton.clone(),
@@ -691,7 +704,6 @@ fn experiments(
 ) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap::pose::regressor::Regressor;
-    use suitcap::pose::rvm::{Rvm, TrainOptions};
     let suit = SuitDefinition::load_dir(suit_dir)?;
     let codebooks = Codebooks::load(suit_dir)?;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -719,19 +731,8 @@ fn experiments(
         println!("{}:", kind.name());
         let set = TrainingData::collect(&suit, &codebooks, train, kind)?;
         let width = set.choose_width(512, seed)?;
-        let (mut x, mut y) = (set.x.clone(), set.y.clone());
-        x.extend_from_slice(&set.held_x);
-        y.extend_from_slice(&set.held_y);
-        let n = x.len() / set.dim;
         for &basis in bases {
-            let options = TrainOptions {
-                basis,
-                width,
-                max_iterations: 5000,
-                tolerance: 1e-3,
-                seed,
-            };
-            let (rvm, report) = Rvm::train(&x, n, set.dim, &y, set.outputs, &options)?;
+            let (rvm, report) = set.fit(basis, width, seed)?;
             let variant = out.join(format!("{}-{basis}", kind.name().replace('+', "_")));
             std::fs::create_dir_all(&variant)
                 .with_context(|| format!("cannot create {}", variant.display()))?;
