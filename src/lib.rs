@@ -17,6 +17,7 @@
 pub mod body;
 pub mod bvh;
 pub mod camera;
+pub mod cloth;
 pub mod colour;
 pub mod dataset;
 pub mod descriptor;

@@ -1,0 +1,5 @@
+//! Cloth: garments simulated on the posed body's collision capsules (work in progress).
+
+pub mod capsule;
+
+pub use capsule::Capsule;
