@@ -15,6 +15,7 @@
 //! [`colour`] (HSV), [`dataset`] (the generator's mocap-aligned dataset format) and [`io`].
 
 pub mod body;
+pub mod body_size;
 pub mod bvh;
 pub mod camera;
 pub mod cloth;

@@ -1,0 +1,305 @@
+//! Body-size adaptation: the height and girth of the person in front of the camera.
+//!
+//! The cloth stage needs collision proxies of the right size, but the pose stage regresses angles on
+//! the suit's template skeleton. In the spirit of Ye et al. 2014 we compare what the camera sees with
+//! the template body posed the same way: the root's depth comes from the suit's marker pitch (7 cm
+//! from square to square, see [`crate::pose::correction::depth_from_markers`]), so the template body
+//! rendered at the estimated root is at the true distance, and only the person's own size differs.
+//! Per frame, with the template body's mask `M` and the person's silhouette `S`:
+//!
+//! * height scale `s = height(S) / height(M)` (bounding-box heights in pixels; both stand at the same
+//!   root and in the same pose, so the ratio is the body's scale);
+//! * girth `g = area(S) / (s² · area(M))` (widths scale with `s·g` and lengths with `s`).
+//!
+//! [`BodySizeEstimator`] keeps the per-frame ratios and reports their medians, which shrug off frames
+//! where the pose or the mask is wrong. The result becomes a [`Subject`] whose skeleton and capsules
+//! the cloth stage collides with.
+
+use glam::{Affine3A, Vec3};
+
+use crate::body::{Body, BodyPart, Subject, BASE_HEIGHT_CM};
+use crate::camera::Camera;
+use crate::mask::Mask;
+use crate::raster::{draw_triangle, Cull, DepthBuffer, ScreenVertex};
+use crate::skeleton::Skeleton;
+
+/// A person's estimated size, relative to a template skeleton.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodySize {
+    /// Multiplies the template skeleton's bone lengths.
+    pub height_scale: f32,
+    /// Multiplies every capsule radius (1 = the base figure's build).
+    pub girth: f32,
+    /// Frames the estimate rests on.
+    pub frames: usize,
+}
+
+impl BodySize {
+    /// The template's own size.
+    pub const TEMPLATE: BodySize = BodySize {
+        height_scale: 1.0,
+        girth: 1.0,
+        frames: 0,
+    };
+
+    /// Standing height in centimetres of a person this size on `template`.
+    pub fn height_cm(&self, template: &Skeleton) -> f32 {
+        skeleton_height_cm(template) * self.height_scale
+    }
+
+    /// The subject and scaled skeleton this size describes on `template`.
+    pub fn subject(&self, template: &Skeleton) -> (Subject, Skeleton) {
+        let subject = Subject {
+            name: "estimated",
+            height_cm: self.height_cm(template),
+            girth: self.girth,
+            arm_ratio: 1.0,
+            leg_ratio: 1.0,
+            skin: [0.8, 0.6, 0.5],
+            shoe: [0.1, 0.1, 0.1],
+        };
+        let scale = self.height_scale;
+        (subject, template.map_offsets(|_, offset| offset * scale))
+    }
+}
+
+/// Standing height of a skeleton in its rest pose: the base figure's height scaled by the ratio of
+/// the head joint's height above the lowest joint (the ankles) to the base figure's (the shipped
+/// CMU/Daz figures all share the base figure's proportions up to scale). Falls back to the base
+/// height when the skeleton has no joint called `head`.
+pub fn skeleton_height_cm(skeleton: &Skeleton) -> f32 {
+    // Head joint above the ankles of the unscaled base figure (measured on the shipped clips); the
+    // other 25 cm of its 166 are the head above the joint and the foot below the ankle.
+    const BASE_HEAD_JOINT_CM: f32 = 140.94;
+    let rest = vec![0.0; skeleton.channel_count()];
+    let positions = skeleton.joint_positions(&rest);
+    let Some(head) = skeleton.find("head") else {
+        return BASE_HEIGHT_CM;
+    };
+    let lowest = positions.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+    let above = positions[head].y - lowest;
+    if above.is_finite() && above > 1.0 {
+        BASE_HEIGHT_CM * above / BASE_HEAD_JOINT_CM
+    } else {
+        BASE_HEIGHT_CM
+    }
+}
+
+/// The height scale and girth that turn `model` (the template body's mask) into `silhouette`, or
+/// `None` when either is empty or touches the image border (a cut-off person has no height).
+pub fn frame_ratios(silhouette: &Mask, model: &Mask) -> Option<(f32, f32)> {
+    let touches_border = |m: &Mask, b: (u32, u32, u32, u32)| {
+        b.0 == 0 || b.1 == 0 || b.2 >= m.width() || b.3 >= m.height()
+    };
+    let s_box = silhouette.bounding_box()?;
+    let m_box = model.bounding_box()?;
+    if touches_border(silhouette, s_box) || touches_border(model, m_box) {
+        return None;
+    }
+    let s_height = (s_box.3 - s_box.1) as f32;
+    let m_height = (m_box.3 - m_box.1) as f32;
+    let scale = s_height / m_height;
+    let girth = silhouette.area() as f32 / (scale * scale * model.area() as f32);
+    (scale.is_finite() && girth.is_finite()).then_some((scale, girth))
+}
+
+/// Rasterizes the capsules of `body` posed by `world` into a person mask as `camera` sees it.
+/// `depth` is scratch space, resized as needed.
+pub fn body_mask(body: &Body, world: &[Affine3A], camera: &Camera, depth: &mut DepthBuffer) -> Mask {
+    let (width, height) = (camera.intrinsics.width, camera.intrinsics.height);
+    depth.clear(width, height);
+    let mut pixels = vec![false; width as usize * height as usize];
+    for part in &body.parts {
+        draw_part(part, world, camera, depth, &mut pixels);
+    }
+    Mask::from_pixels(width, height, pixels).unwrap_or_else(|| Mask::empty(width, height))
+}
+
+fn draw_part(
+    part: &BodyPart,
+    world: &[Affine3A],
+    camera: &Camera,
+    depth: &mut DepthBuffer,
+    pixels: &mut [bool],
+) {
+    let Some(transform) = world.get(part.joint) else {
+        return;
+    };
+    let mesh = part.mesh(16, 4.0);
+    let projected: Vec<Option<ScreenVertex>> = mesh
+        .vertices
+        .iter()
+        .map(|v| {
+            camera
+                .project(transform.transform_point3(v.position))
+                .map(ScreenVertex::from)
+        })
+        .collect();
+    for t in &mesh.triangles {
+        let [Some(a), Some(b), Some(c)] = t.map(|i| projected[i as usize]) else {
+            continue;
+        };
+        draw_triangle(depth, [a, b, c], Cull::None, 1.0, |f| pixels[f.index] = true);
+    }
+}
+
+/// Collects per-frame size ratios and reports their medians.
+#[derive(Clone, Debug, Default)]
+pub struct BodySizeEstimator {
+    scales: Vec<f32>,
+    girths: Vec<f32>,
+    depth: Option<DepthBuffer>,
+}
+
+impl BodySizeEstimator {
+    pub fn new() -> BodySizeEstimator {
+        BodySizeEstimator::default()
+    }
+
+    /// Adds one frame: the person's `silhouette` and the template `body` posed by `frame` (channel
+    /// values of `skeleton`, the template skeleton the body was built on). Returns whether the frame
+    /// counted.
+    pub fn add_frame(
+        &mut self,
+        silhouette: &Mask,
+        body: &Body,
+        skeleton: &Skeleton,
+        frame: &[f32],
+        camera: &Camera,
+    ) -> bool {
+        let mut world = Vec::new();
+        skeleton.forward_kinematics(frame, &mut world);
+        let depth = self
+            .depth
+            .get_or_insert_with(|| DepthBuffer::new(silhouette.width(), silhouette.height()));
+        let model = body_mask(body, &world, camera, depth);
+        match frame_ratios(silhouette, &model) {
+            Some((s, g)) => {
+                self.scales.push(s);
+                self.girths.push(g);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Frames counted so far.
+    pub fn frames(&self) -> usize {
+        self.scales.len()
+    }
+
+    /// The medians of the ratios seen, or the template's size when no frame counted.
+    pub fn estimate(&self) -> BodySize {
+        if self.scales.is_empty() {
+            return BodySize::TEMPLATE;
+        }
+        BodySize {
+            height_scale: median(&self.scales),
+            girth: median(&self.girths),
+            frames: self.scales.len(),
+        }
+    }
+}
+
+fn median(values: &[f32]) -> f32 {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f32::total_cmp);
+    let n = sorted.len();
+    if n % 2 == 1 {
+        sorted[n / 2]
+    } else {
+        0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
+    }
+}
+
+/// The template body for `skeleton` at girth 1 (what [`BodySizeEstimator::add_frame`] compares with).
+pub fn template_body(skeleton: &Skeleton) -> Result<Body, crate::body::MissingJoint> {
+    let (subject, scaled) = BodySize::TEMPLATE.subject(skeleton);
+    Body::new(&subject, &scaled)
+}
+
+/// Where the root of `skeleton` is in the world for `frame` (for reports).
+pub fn root_position(skeleton: &Skeleton, frame: &[f32]) -> Vec3 {
+    skeleton
+        .joint_positions(frame)
+        .first()
+        .copied()
+        .unwrap_or(Vec3::ZERO)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Intrinsics;
+    use std::path::Path;
+
+    fn rect(width: u32, height: u32, x0: u32, y0: u32, x1: u32, y1: u32) -> Mask {
+        let mut m = Mask::empty(width, height);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                m.pixels_mut()[(y * width + x) as usize] = true;
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn a_twice_as_tall_and_wide_silhouette_is_scale_two_girth_one() {
+        // Model: 2 wide × 3 tall = 6 px. Silhouette: 4 × 6 = 24 px → s = 2, g = 24 / (4 · 6) = 1.
+        let model = rect(10, 10, 1, 1, 2, 3);
+        let person = rect(10, 10, 1, 1, 4, 6);
+        let (s, g) = frame_ratios(&person, &model).expect("ratios");
+        assert_eq!((s, g), (2.0, 1.0));
+        // Same height, twice as wide: girth 2.
+        let wide = rect(10, 10, 1, 1, 4, 3);
+        assert_eq!(frame_ratios(&wide, &model), Some((1.0, 2.0)));
+    }
+
+    #[test]
+    fn a_silhouette_cut_by_the_border_or_empty_does_not_count() {
+        let model = rect(10, 10, 1, 1, 2, 3);
+        assert_eq!(frame_ratios(&rect(10, 10, 0, 1, 2, 3), &model), None);
+        assert_eq!(frame_ratios(&rect(10, 10, 1, 1, 2, 9), &model), None);
+        assert_eq!(frame_ratios(&Mask::empty(10, 10), &model), None);
+    }
+
+    #[test]
+    fn the_median_ignores_one_bad_frame() {
+        assert_eq!(median(&[1.0, 1.1, 9.0]), 1.1);
+        assert_eq!(median(&[1.0, 2.0]), 1.5);
+    }
+
+    /// A known subject rendered with the body model is measured back at its own size.
+    #[test]
+    fn a_rendered_subject_is_measured_at_its_size() {
+        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        let motion = crate::bvh::Motion::load(&clip).expect("clip");
+        let template = &motion.skeleton;
+        let truth = BodySize {
+            height_scale: 1.12,
+            girth: 1.2,
+            frames: 0,
+        };
+        let (subject, scaled) = truth.subject(template);
+        let person_body = Body::new(&subject, &scaled).expect("body");
+        let body = template_body(template).expect("template body");
+        let camera = Camera::look_at(
+            Intrinsics::from_fov(320, 240, 60.0),
+            Vec3::new(0.0, 100.0, 600.0),
+            Vec3::new(0.0, 90.0, 0.0),
+            Vec3::Y,
+        );
+        let mut estimator = BodySizeEstimator::new();
+        let mut depth = DepthBuffer::new(320, 240);
+        for frame in motion.frames().step_by(20).take(6) {
+            let mut world = Vec::new();
+            scaled.forward_kinematics(frame, &mut world);
+            let silhouette = body_mask(&person_body, &world, &camera, &mut depth);
+            estimator.add_frame(&silhouette, &body, template, frame, &camera);
+        }
+        let size = estimator.estimate();
+        assert!(size.frames >= 4, "{size:?}");
+        assert!((size.height_scale - 1.12).abs() < 0.05, "{size:?}");
+        assert!((size.girth - 1.2).abs() < 0.12, "{size:?}");
+    }
+}
