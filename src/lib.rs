@@ -27,6 +27,7 @@ pub mod mask;
 pub mod model;
 pub mod pipeline;
 pub mod pose;
+pub mod queue;
 pub mod raster;
 pub mod segment;
 pub mod skeleton;

@@ -48,6 +48,9 @@ enum Command {
         /// Wanted camera frame rate.
         #[arg(long)]
         fps: Option<f64>,
+        /// Write JPEG frames of this quality (1–100) instead of PNG.
+        #[arg(long, value_parser = clap::value_parser!(u8).range(1..=100))]
+        jpeg: Option<u8>,
     },
     /// Segment every frame of INPUT with the suit's trained segmenter: one PNG mask per frame
     /// (same names as a frame directory's files, else NNNNNN.png).
@@ -137,6 +140,7 @@ fn capture(
     frames: Option<u64>,
     size: Option<(u32, u32)>,
     fps: Option<f64>,
+    jpeg: Option<u8>,
 ) -> anyhow::Result<()> {
     let options = SourceOptions {
         size,
@@ -154,10 +158,9 @@ fn capture(
         }
         match source.next_frame() {
             Ok(Some(frame)) => {
-                let path = out.join(format!("{written:06}.png"));
-                frame
-                    .image
-                    .save(&path)
+                let extension = if jpeg.is_some() { "jpg" } else { "png" };
+                let path = out.join(format!("{written:06}.{extension}"));
+                save_frame(&frame.image, &path, jpeg)
                     .with_context(|| format!("cannot write {}", path.display()))?;
                 written += 1;
             }
@@ -186,6 +189,18 @@ fn capture(
     );
     for s in &skipped {
         println!("  skipped: {s}");
+    }
+    Ok(())
+}
+
+/// Writes a frame as PNG, or as JPEG of the given quality.
+fn save_frame(image: &image::RgbImage, path: &Path, jpeg: Option<u8>) -> anyhow::Result<()> {
+    match jpeg {
+        None => image.save(path)?,
+        Some(quality) => {
+            let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+            image::codecs::jpeg::JpegEncoder::new_with_quality(file, quality).encode_image(image)?;
+        }
     }
     Ok(())
 }
@@ -598,7 +613,8 @@ fn main() -> ExitCode {
             frames,
             size,
             fps,
-        } => capture(input, out, *frames, *size, *fps),
+            jpeg,
+        } => capture(input, out, *frames, *size, *fps, *jpeg),
         Command::Check { suit, data } => check(suit, data.as_ref()),
         Command::Run {
             input,
