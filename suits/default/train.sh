@@ -5,7 +5,8 @@
 #    bundled backgrounds in tests/data/backgrounds) into WORK_DIR (default: a temporary directory);
 #    21 clips, about 5,500 frames, about 2.5 minutes on a 2-core machine;
 # 2. suitcap-train suit: segmenter tables (20 frames of the first dataset), codebooks, RVM regressor,
-#    written into suits/default/.
+#    written into suits/default/;
+# 3. suitcap-train limits: joint limits (joint_limits.toml) from the same clips.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 work="${1:-$(mktemp -d)}"
@@ -20,4 +21,5 @@ for clip in suits/default/mocap/*.bvh; do
 done
 rm -f suits/default/segmenter.bin suits/default/codebook_*.bin
 ./target/release/suitcap-train suit --suit suits/default "${data[@]}" --basis 1500
+./target/release/suitcap-train limits --suit suits/default --data suits/default/mocap/*.bvh
 echo "datasets kept in $work"

@@ -83,6 +83,18 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// Learn the joint limits (per rotation channel, the range the training motions cover plus a
+    /// margin) from mocap-aligned datasets or BVH clips; writes SUIT/joint_limits.toml.
+    Limits {
+        #[arg(long)]
+        suit: PathBuf,
+        /// Dataset directories (their motion.bvh) and/or BVH files.
+        #[arg(long, required = true, num_args = 1..)]
+        data: Vec<PathBuf>,
+        /// Degrees added on each side of the range seen.
+        #[arg(long, default_value_t = suitcap::pose::smoothing::DEFAULT_MARGIN_DEG)]
+        margin: f32,
+    },
     /// The source paper's experiments on one trained suit's segmenter and codebooks: regressors for
     /// the FC, HOG, FC+HOG(+box) and silhouette descriptors with S candidate basis functions each,
     /// trained on --train and measured on --data (segmenter masks). Writes OUT/experiments.csv and a
@@ -548,6 +560,32 @@ fn train_suit(
     Ok(())
 }
 
+/// Learns `joint_limits.toml` from the motions of datasets (their `motion.bvh`) or BVH files.
+fn limits(suit_dir: &Path, data: &[PathBuf], margin: f32) -> anyhow::Result<()> {
+    use suitcap::pose::smoothing::{JointLimits, JOINT_LIMITS_FILE};
+    let motions = data
+        .iter()
+        .map(|path| {
+            let file = if path.is_dir() {
+                path.join("motion.bvh")
+            } else {
+                path.clone()
+            };
+            Ok(suitcap::bvh::Motion::load(&file)?)
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let limits = JointLimits::learn(&motions, margin);
+    let path = suit_dir.join(JOINT_LIMITS_FILE);
+    limits.save(&path)?;
+    let frames: usize = motions.iter().map(|m| m.frame_count()).sum();
+    println!(
+        "joint limits from {} motions ({frames} frames, margin {margin}°) → {}",
+        motions.len(),
+        path.display()
+    );
+    Ok(())
+}
+
 /// Per-dataset results of an evaluation: (dataset, mean Euler error, mean geodesic error, frames).
 type DatasetErrors = Vec<(String, f64, f64, usize)>;
 
@@ -570,6 +608,22 @@ fn evaluate(
         .collect();
     let mut all = JointErrors::new(names.clone());
     let mut per_dataset = Vec::new();
+    // The runtime's pose filter, switched on piece by piece: (label, smoothing, limits, errors).
+    use suitcap::pose::smoothing::{JointLimits, PoseFilter, SmoothingParams, JOINT_LIMITS_FILE};
+    let limits_path = suit_dir.join(JOINT_LIMITS_FILE);
+    let limits = limits_path
+        .exists()
+        .then(|| JointLimits::load(&limits_path))
+        .transpose()?;
+    let mut variants: Vec<(&str, bool, bool, JointErrors)> = [
+        ("One-Euro smoothing", true, false),
+        ("joint limits", false, true),
+        ("smoothing + limits", true, true),
+    ]
+    .into_iter()
+    .filter(|&(_, _, lim)| !lim || limits.is_some())
+    .map(|(label, smooth, lim)| (label, smooth, lim, JointErrors::new(names.clone())))
+    .collect();
     // Root position error sums (cm) before and after the position correction, frames, corrected frames.
     let mut root = (0.0f64, 0.0f64, 0usize, 0usize);
     for dir in data {
@@ -579,6 +633,18 @@ fn evaluate(
         pipeline.reset();
         let mut errors = JointErrors::new(names.clone());
         let mut missed = 0;
+        let skeleton = pipeline.regressor.skeleton.skeleton.clone();
+        let mut filters: Vec<PoseFilter> = variants
+            .iter()
+            .map(|&(_, smooth, lim, _)| {
+                PoseFilter::new(
+                    &skeleton,
+                    smooth.then(SmoothingParams::default),
+                    limits.as_ref().filter(|_| lim),
+                )
+            })
+            .collect();
+        let frame_time = dataset.motion.frame_time;
         let root_of = |values: &[f32]| {
             glam::Vec3::from_array(layout.root_position.map(|c| values[c]))
                 + dataset.motion.skeleton.joint(0).offset
@@ -588,9 +654,15 @@ fn evaluate(
             let result = pipeline.process(&image, &dataset.camera, truth_masks.then_some(&mask));
             if !result.person {
                 missed += 1;
+                filters.iter_mut().for_each(PoseFilter::reset);
                 continue;
             }
             errors.add(&layout, dataset.motion.frame(index), &result.frame);
+            for (filter, variant) in filters.iter_mut().zip(variants.iter_mut()) {
+                let mut filtered = result.frame.clone();
+                filter.apply(index as f64 * frame_time, &mut filtered);
+                variant.3.add(&layout, dataset.motion.frame(index), &filtered);
+            }
             // The regressor's skeleton is one subject's; compare root positions in the world frame.
             let truth_root = root_of(dataset.motion.frame(index));
             let before = glam::Vec3::from_array(result.root_before_correction)
@@ -621,6 +693,21 @@ fn evaluate(
             errors.mean_geodesic(),
             errors.frames,
         ));
+    }
+    if verbose {
+        println!(
+            "mean joint angle error of the raw regression: {:.2}° (Euler)",
+            all.mean_euler()
+        );
+        for (label, _, _, errors) in &variants {
+            println!("  with {label}: {:.2}° (Euler)", errors.mean_euler());
+        }
+        if limits.is_none() {
+            println!(
+                "  ({} missing: no joint-limit figures; `suitcap-train limits` learns it)",
+                limits_path.display()
+            );
+        }
     }
     if verbose && root.2 > 0 {
         println!(
@@ -838,6 +925,7 @@ fn main() -> ExitCode {
             out,
             seed,
         } => experiments(suit, train, data, basis, out, *seed),
+        Command::Limits { suit, data, margin } => limits(suit, data, *margin),
         Command::Eval {
             suit,
             data,
