@@ -127,7 +127,10 @@ impl Motion {
             line,
             message,
         };
-        let bvh = bvh_anim::from_bytes(bytes).map_err(|e| parse_error(e.line(), e.to_string()))?;
+        check_counts(bytes).map_err(|(line, message)| parse_error(Some(line), message))?;
+        let bvh = parse_without_panic(bytes)
+            .map_err(|message| parse_error(None, message))?
+            .map_err(|e| parse_error(e.line(), e.to_string()))?;
 
         let mut joints = Vec::new();
         let mut first_channel = 0;
@@ -375,9 +378,88 @@ impl Motion {
     }
 }
 
+/// Most channels a BVH joint can have (three positions, three rotations).
+const MAX_JOINT_CHANNELS: u64 = 6;
+
+/// Rejects counts that would make `bvh_anim` 0.4 reserve memory before reading the data it counts
+/// (a joint's declared `CHANNELS` count, and channels × `Frames` values): a failed allocation aborts
+/// the process, which no error handling can catch. Every value takes at least one byte, so the
+/// declared frames must fit in the file. Errors carry the 1-based line.
+fn check_counts(bytes: &[u8]) -> Result<(), (usize, String)> {
+    let number = |t: Option<&[u8]>| std::str::from_utf8(t?).ok()?.parse::<u64>().ok();
+    let mut channels = 0u64;
+    for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let mut tokens = line
+            .split(|&b| b.is_ascii_whitespace() || b == b':')
+            .filter(|t| !t.is_empty());
+        match tokens.next() {
+            Some(b"CHANNELS") => {
+                if let Some(declared) = number(tokens.next()).filter(|&d| d > MAX_JOINT_CHANNELS) {
+                    return Err((
+                        n + 1,
+                        format!("CHANNELS {declared}: a joint has at most {MAX_JOINT_CHANNELS} channels"),
+                    ));
+                }
+                channels += tokens.count() as u64;
+            }
+            Some(b"Frames") => {
+                if let Some(frames) = number(tokens.next()) {
+                    if u128::from(frames) * u128::from(channels.max(1)) > bytes.len() as u128 {
+                        return Err((
+                            n + 1,
+                            format!(
+                                "Frames: {frames} frames of {channels} channels are more values than the file holds"
+                            ),
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+thread_local! {
+    /// Set while `bvh_anim` runs on this thread, so its panics are not printed.
+    static QUIET_PANICS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// `bvh_anim::from_bytes`, with its panics on malformed input (0.4 panics on e.g. a `ROOT` without
+/// a name or an unexpected `JOINT`) turned into an error message. The panic hook is wrapped once so
+/// that those panics print nothing; every other panic goes to the previous hook as before.
+fn parse_without_panic(
+    bytes: &[u8],
+) -> Result<Result<bvh_anim::Bvh, bvh_anim::errors::LoadError>, String> {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET_PANICS.with(std::cell::Cell::get) {
+                previous(info);
+            }
+        }));
+    });
+    QUIET_PANICS.with(|q| q.set(true));
+    let result = std::panic::catch_unwind(|| bvh_anim::from_bytes(bytes));
+    QUIET_PANICS.with(|q| q.set(false));
+    result.map_err(|payload| {
+        let reason = payload
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "the parser gave up".to_owned());
+        format!("malformed hierarchy: {reason}")
+    })
+}
+
 fn close_joint(out: &mut String, joints: &[Joint], index: usize, depth: usize) {
     let pad = "\t".repeat(depth);
-    if let Some(end) = joints[index].end_site {
+    // A leaf needs an End Site to be read back as a joint (bvh_anim drops a childless joint
+    // without one), so write a zero-length one when the source had none.
+    let leaf = !joints.iter().any(|j| j.parent == Some(index));
+    let end_site = joints[index].end_site.or(leaf.then_some(Vec3::ZERO));
+    if let Some(end) = end_site {
         let _ = writeln!(out, "{pad}\tEnd Site");
         let _ = writeln!(out, "{pad}\t{{");
         let _ = writeln!(out, "{pad}\t\tOFFSET {}", format_vec(end));

@@ -18,6 +18,8 @@ use suitcap::source::directory::list_frame_files;
 use suitcap::source::{open_source, SourceError, SourceOptions};
 use suitcap::suit::SuitDefinition;
 
+mod cli;
+
 #[derive(Parser)]
 #[command(
     name = "suitcap",
@@ -27,6 +29,32 @@ use suitcap::suit::SuitDefinition;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+}
+
+#[derive(Subcommand)]
+enum SuitCommand {
+    /// Printable sewing panels of the suit's marker layout at true size: PNG (at --dpi) and SVG per
+    /// panel, made to measure for a built-in subject or a height and girth.
+    Pattern {
+        #[arg(long, default_value = "suits/default")]
+        suit: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// Built-in subject whose proportions the suit is cut for (default chidi).
+        #[arg(long)]
+        subject: Option<String>,
+        /// Body height in cm (overrides the subject's).
+        #[arg(long)]
+        height: Option<f32>,
+        /// Girth factor, 1 = the base figure's build (overrides the subject's).
+        #[arg(long)]
+        girth: Option<f32>,
+        #[arg(long, default_value_t = 150.0)]
+        dpi: f32,
+        /// Print each marker's id on it.
+        #[arg(long)]
+        marker_ids: bool,
+    },
 }
 
 #[derive(Subcommand)]
@@ -99,6 +127,8 @@ enum Command {
     },
     /// Estimate the pose in every frame of a recording: OUT/take.bvh (one BVH frame per input frame,
     /// on the suit's skeleton) and OUT/frames.csv (per frame: person seen, markers, milliseconds).
+    /// The whole pipeline on a recorded input (frame directory or Y4M): pose, garment, compositing.
+    /// Writes OUT/take.bvh, the composited frames OUT/frames/, OUT/preview.gif and OUT/frames.csv.
     Run {
         /// A directory of frames or a .y4m file.
         input: String,
@@ -109,6 +139,67 @@ enum Command {
         /// The camera's calibration; default: camera.toml beside the input (a dataset), else in the suit.
         #[arg(long)]
         camera: Option<PathBuf>,
+        #[command(flatten)]
+        garment: cli::tryon::GarmentArgs,
+        #[command(flatten)]
+        pose: cli::tryon::PoseArgs,
+    },
+    /// The camera with the simulated garment in a window, at the camera's rate; records BVH.
+    Live {
+        /// /dev/videoN or a camera index (a frame directory or .y4m file also works, for testing).
+        #[arg(long, default_value = "/dev/video0")]
+        device: String,
+        #[arg(long, default_value = "suits/default")]
+        suit: PathBuf,
+        /// The camera's calibration (default: SUIT/camera.toml).
+        #[arg(long)]
+        camera: Option<PathBuf>,
+        /// Wanted camera size, e.g. 640x480 (default: the calibration's).
+        #[arg(long, value_parser = parse_size)]
+        size: Option<(u32, u32)>,
+        #[arg(long)]
+        fps: Option<f64>,
+        /// Record from the start into this BVH file (R starts and stops recording).
+        #[arg(long)]
+        record: Option<PathBuf>,
+        #[command(flatten)]
+        garment: cli::tryon::GarmentArgs,
+        #[command(flatten)]
+        pose: cli::tryon::PoseArgs,
+    },
+    /// Simulate a garment on a given motion (e.g. a generated dataset's motion.bvh) and composite it
+    /// into the given frames: PNG frames and a preview GIF in OUT, and the cloth quality figures.
+    Drape {
+        #[arg(long)]
+        motion: PathBuf,
+        #[arg(long)]
+        camera: PathBuf,
+        /// Directory of frames, one per motion frame.
+        #[arg(long)]
+        frames: PathBuf,
+        /// Person masks for the body-size estimate (default: masks/ beside the frames, if present).
+        #[arg(long)]
+        masks: Option<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+        #[command(flatten)]
+        garment: cli::tryon::GarmentArgs,
+    },
+    /// The quick start: the footage bundled with the default suit through the whole pipeline
+    /// (no camera, no network, nothing to train); results in OUT.
+    Demo {
+        #[arg(long, default_value = "suits/default")]
+        suit: PathBuf,
+        #[arg(long, default_value = "out/demo")]
+        out: PathBuf,
+    },
+    /// Per-stage median milliseconds and frames/s of the pose and try-on pipeline on the suit's
+    /// bundled footage (or --input), sequential and on threads, and the peak resident memory.
+    Bench(cli::bench::BenchArgs),
+    /// Suit tools.
+    Suit {
+        #[command(subcommand)]
+        command: SuitCommand,
     },
     /// Validate a suit directory (suit.toml) and, optionally, a dataset against it.
     Check {
@@ -534,73 +625,25 @@ fn describe(
     Ok(())
 }
 
-fn run(input: &str, suit_dir: &Path, out: &Path, camera: Option<&PathBuf>) -> anyhow::Result<()> {
-    use suitcap::camera::Camera;
-    use suitcap::pipeline::PosePipeline;
-    let camera_path = match camera {
-        Some(path) => path.clone(),
-        None => {
-            let beside = Path::new(input).parent().map(|p| p.join("camera.toml"));
-            match beside.filter(|p| p.is_file()) {
-                Some(p) => p,
-                None => suit_dir.join("camera.toml"),
-            }
-        }
-    };
-    let camera = Camera::load(&camera_path)?;
-    let mut pipeline = PosePipeline::load(suit_dir)?;
-    let mut source = open_source(input, &SourceOptions::default())?;
-    if source.size() != (camera.intrinsics.width, camera.intrinsics.height) {
-        bail!(
-            "{input} is {}x{}, but {} is calibrated for {}x{}",
-            source.size().0,
-            source.size().1,
-            camera_path.display(),
-            camera.intrinsics.width,
-            camera.intrinsics.height
-        );
-    }
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
-    let fps = source.frame_rate().unwrap_or(30.0);
-    let mut take = suitcap::bvh::Motion::new(
-        pipeline.regressor.skeleton.skeleton.clone(),
-        1.0 / fps,
-        Vec::new(),
-    )?;
-    let mut rows = String::from("frame,person,markers,segment_ms,describe_ms,regress_ms\n");
-    let (mut skipped, mut nobody, mut times) = (Vec::new(), 0usize, Vec::new());
-    let bar = indicatif::ProgressBar::new_spinner();
-    loop {
-        let Some(frame) = next_good_frame(source.as_mut(), &mut skipped, take.frame_count()) else {
-            break;
-        };
-        let result = pipeline.process(&frame.image, &camera, None);
-        take.push_frame(&result.frame)?;
-        nobody += (!result.person) as usize;
-        let t = result.times;
-        times.push(t.segment + t.describe + t.regress);
-        rows.push_str(&format!(
-            "{},{},{},{:.3},{:.3},{:.3}\n",
-            frame.index, result.person as u8, result.markers, t.segment, t.describe, t.regress
-        ));
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    let bvh = out.join("take.bvh");
-    take.write(&bvh)?;
-    suitcap::io::write_atomic(&out.join("frames.csv"), rows.as_bytes())
-        .with_context(|| format!("cannot write {}", out.display()))?;
-    times.sort_by(f64::total_cmp);
+fn suit_pattern(
+    suit: &Path,
+    out: &Path,
+    subject: Option<&str>,
+    height: Option<f32>,
+    girth: Option<f32>,
+    dpi: f32,
+    marker_ids: bool,
+) -> anyhow::Result<()> {
+    use suitcap::pattern::{pattern_subject, subject_note, write_suit_pattern, PatternOptions};
+    let subject = pattern_subject(subject, height, girth)?;
+    let options = PatternOptions { dpi, marker_ids };
+    let files = write_suit_pattern(suit, &subject, out, &options)?;
     println!(
-        "{} frames → {} ({nobody} frames with nobody: previous pose kept, flagged in frames.csv); {} corrupt frames skipped; median {:.2} ms per frame (segment + describe + regress)",
-        take.frame_count(),
-        bvh.display(),
-        skipped.len(),
-        times.get(times.len() / 2).copied().unwrap_or(0.0)
+        "{} files in {} ({}; PNG at {dpi} dpi, SVG at true size in mm): print at 100 % and check the 10 cm bar",
+        files.len(),
+        out.display(),
+        subject_note(&subject)
     );
-    for s in &skipped {
-        println!("  skipped: {s}");
-    }
     Ok(())
 }
 
@@ -621,7 +664,50 @@ fn main() -> ExitCode {
             suit,
             out,
             camera,
-        } => run(input, suit, out, camera.as_ref()),
+            garment,
+            pose,
+        } => cli::tryon::run(input, suit, out, camera.as_ref(), garment, pose),
+        Command::Live {
+            device,
+            suit,
+            camera,
+            size,
+            fps,
+            record,
+            garment,
+            pose,
+        } => cli::tryon::live(
+            device,
+            suit,
+            camera.as_ref(),
+            *size,
+            *fps,
+            record.as_ref(),
+            garment,
+            pose,
+        ),
+        Command::Drape {
+            motion,
+            camera,
+            frames,
+            masks,
+            out,
+            garment,
+        } => cli::tryon::drape(motion, camera, frames, masks.as_ref(), out, garment),
+        Command::Demo { suit, out } => cli::tryon::demo(suit, out),
+        Command::Bench(args) => cli::bench::bench(args),
+        Command::Suit {
+            command:
+                SuitCommand::Pattern {
+                    suit,
+                    out,
+                    subject,
+                    height,
+                    girth,
+                    dpi,
+                    marker_ids,
+                },
+        } => suit_pattern(suit, out, subject.as_deref(), *height, *girth, *dpi, *marker_ids),
         Command::Describe {
             suit,
             input,

@@ -46,7 +46,8 @@ pub struct PoseFrame {
     /// False when nobody was seen: `frame` is then the previous pose (or the template).
     pub person: bool,
     pub mask: Mask,
-    pub markers: usize,
+    /// The suit markers detected in the frame (empty when nobody was seen).
+    pub markers: Vec<crate::descriptor::markers::DetectedMarker>,
     /// The regressed pose vector (empty when nobody was seen).
     pub pose: Vec<f32>,
     /// Root position channels before the position correction, and the image shift it applied.
@@ -130,7 +131,7 @@ impl PosePipeline {
                 frame,
                 person: false,
                 mask,
-                markers: 0,
+                markers: Vec::new(),
                 pose: Vec::new(),
                 root_before_correction,
                 correction: None,
@@ -176,7 +177,7 @@ impl PosePipeline {
             frame,
             person: true,
             mask,
-            markers: markers.len(),
+            markers,
             pose: self.pose.clone(),
             root_before_correction,
             correction,

@@ -16,6 +16,7 @@ pub mod correction;
 pub mod eval;
 pub mod regressor;
 pub mod rvm;
+pub mod smoothing;
 
 use glam::{Mat3, Vec2, Vec3};
 

@@ -14,6 +14,7 @@
 
 pub mod convert;
 pub mod directory;
+pub mod memory;
 pub mod v4l2;
 pub mod y4m;
 

@@ -1,0 +1,824 @@
+//! `suitcap run`, `drape`, `demo` and `live`: the try-on pipeline behind the command line.
+//!
+//! `run` and `live` drive [`suitcap::tryon::runner`] (stages on threads), recording the pose as BVH;
+//! `drape` simulates a garment on a given motion (ground truth from the generator) and composites it
+//! into the given frames; `demo` is `run` on the footage bundled with the default suit, compared with
+//! its ground truth. Everything written goes to a temporary name first and is renamed, and the BVH
+//! take is written whatever ends the run (end of input, a failing camera, Ctrl-C, SIGTERM).
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+
+use anyhow::{bail, Context};
+use clap::Args;
+use image::RgbImage;
+
+use suitcap::bvh::Motion;
+use suitcap::camera::Camera;
+use suitcap::cloth::material::Material;
+use suitcap::pipeline::PosePipeline;
+use suitcap::pose::smoothing::{JointLimits, PoseFilter, SmoothingParams, JOINT_LIMITS_FILE};
+use suitcap::preview::{GifPreview, PreviewSettings};
+use suitcap::render::RenderSettings;
+use suitcap::source::{open_source, FrameSource, SourceOptions};
+use suitcap::tryon::runner::{self, Controls, FrameTimes, InputKind, Output, PoseStage, RunSummary};
+use suitcap::tryon::{
+    ClothOptions, ClothStage, ClothStatus, GarmentChoice, Overlays, RenderStage, SimulationMode,
+};
+
+/// Options shared by the commands that put a garment on.
+#[derive(Args, Clone, Debug)]
+pub struct GarmentArgs {
+    /// tshirt, skirt, dress, a garment .obj (rest-pose world cm), or none.
+    #[arg(long, default_value = "tshirt")]
+    pub garment: String,
+    /// Fabric preset: light, medium, stiff, chiffon, silk, cotton_poplin, cotton_jersey, wool, denim.
+    #[arg(long, default_value = "medium")]
+    pub material: String,
+    /// Simulate as the live app does (2 cm garment, 16 substeps) instead of the quality mode
+    /// (1 cm garment, more substeps) that recorded input gets by default.
+    #[arg(long)]
+    pub live_cloth: bool,
+    /// Debug overlays drawn into the frames: any of mask, markers, skeleton, timings (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub overlays: Vec<String>,
+}
+
+/// Options of the pose stage.
+#[derive(Args, Clone, Debug)]
+pub struct PoseArgs {
+    /// Switch off the One-Euro smoothing of the pose.
+    #[arg(long)]
+    pub no_smoothing: bool,
+    /// Switch off the joint limits (SUIT/joint_limits.toml).
+    #[arg(long)]
+    pub no_limits: bool,
+}
+
+pub fn parse_overlays(names: &[String]) -> anyhow::Result<Overlays> {
+    let mut o = Overlays::default();
+    for name in names.iter().filter(|n| !n.is_empty()) {
+        match name.as_str() {
+            "mask" => o.mask = true,
+            "markers" => o.markers = true,
+            "skeleton" => o.skeleton = true,
+            "timings" => o.timings = true,
+            other => bail!("--overlays: unknown overlay '{other}' (mask, markers, skeleton, timings)"),
+        }
+    }
+    Ok(o)
+}
+
+fn material(name: &str) -> anyhow::Result<Material> {
+    Material::preset(name).with_context(|| {
+        format!("--material: unknown fabric '{name}' (light, medium, stiff, chiffon, silk, cotton_poplin, cotton_jersey, wool, denim)")
+    })
+}
+
+/// The cloth stage asked for, or `None` for `--garment none`.
+fn cloth_stage(
+    args: &GarmentArgs,
+    template: &suitcap::skeleton::Skeleton,
+    mode: SimulationMode,
+) -> anyhow::Result<Option<ClothStage>> {
+    if args.garment.eq_ignore_ascii_case("none") {
+        return Ok(None);
+    }
+    let garment = GarmentChoice::parse(&args.garment).context("--garment")?;
+    if let GarmentChoice::Obj(path) = &garment {
+        if !path.is_file() {
+            bail!("--garment: {} does not exist", path.display());
+        }
+    }
+    let mut options = ClothOptions::new(garment, mode);
+    options.material = material(&args.material)?;
+    Ok(Some(ClothStage::new(template, options)?))
+}
+
+fn render_stage(pipeline: &PosePipeline) -> RenderStage {
+    let colours = pipeline
+        .suit
+        .markers
+        .iter()
+        .map(|c| c.hsv.to_rgb().map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+        .collect();
+    RenderStage::new(RenderSettings::default(), colours)
+}
+
+fn pose_stage(suit_dir: &Path, args: &PoseArgs) -> anyhow::Result<PoseStage> {
+    let pipeline = PosePipeline::load(suit_dir)?;
+    let limits_path = suit_dir.join(JOINT_LIMITS_FILE);
+    let limits = if args.no_limits || !limits_path.exists() {
+        None
+    } else {
+        Some(JointLimits::load(&limits_path)?)
+    };
+    let smoothing = (!args.no_smoothing).then(SmoothingParams::default);
+    let filter = (smoothing.is_some() || limits.is_some()).then(|| {
+        PoseFilter::new(
+            &pipeline.regressor.skeleton.skeleton,
+            smoothing,
+            limits.as_ref(),
+        )
+    });
+    Ok(PoseStage { pipeline, filter })
+}
+
+/// The camera of an input: `--camera`, else camera.toml beside the input, else in the suit.
+pub fn camera_for(input: &str, suit_dir: &Path, camera: Option<&PathBuf>) -> anyhow::Result<Camera> {
+    let path = match camera {
+        Some(path) => path.clone(),
+        None => {
+            let input = Path::new(input);
+            let beside = [input.join("camera.toml"), input.with_file_name("camera.toml")];
+            match beside.into_iter().find(|p| p.is_file()) {
+                Some(p) => p,
+                None => suit_dir.join("camera.toml"),
+            }
+        }
+    };
+    Ok(Camera::load(&path)?)
+}
+
+/// Lets Ctrl-C and SIGTERM stop the capture so the take is finalised.
+pub fn stop_on_signals(controls: &Arc<Controls>) {
+    let controls = Arc::clone(controls);
+    if let Err(e) = ctrlc::set_handler(move || {
+        eprintln!("\nstopping: finishing the frames in flight and writing the take…");
+        controls.stop.store(true, Ordering::Relaxed);
+    }) {
+        eprintln!("warning: Ctrl-C will not finalise the take: {e}");
+    }
+}
+
+/// Per-stage milliseconds of every frame, for medians.
+#[derive(Default)]
+pub struct TimingLog {
+    frames: Vec<FrameTimes>,
+}
+
+impl TimingLog {
+    pub fn push(&mut self, t: FrameTimes) {
+        self.frames.push(t);
+    }
+
+    fn median(&self, f: impl Fn(&FrameTimes) -> f64) -> f64 {
+        let mut v: Vec<f64> = self.frames.iter().map(f).collect();
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    }
+
+    /// "stage median ms" lines.
+    pub fn summary(&self) -> String {
+        let stages: [(&str, fn(&FrameTimes) -> f64); 7] = [
+            ("segment", |t| t.segment),
+            ("describe", |t| t.describe),
+            ("regress + root", |t| t.regress),
+            ("cloth", |t| t.cloth),
+            ("render", |t| t.render),
+            ("composite", |t| t.composite),
+            ("latency", |t| t.latency),
+        ];
+        let mut out = format!("per-stage median over {} frames:\n", self.frames.len());
+        for (name, f) in stages {
+            out.push_str(&format!("  {name:<16} {:>8.2} ms\n", self.median(f)));
+        }
+        out
+    }
+}
+
+/// A BVH take being recorded: one frame per processed video frame.
+pub struct Take {
+    motion: Motion,
+    path: PathBuf,
+}
+
+impl Take {
+    pub fn new(pipeline: &PosePipeline, fps: f64, path: PathBuf) -> anyhow::Result<Take> {
+        let motion = Motion::new(
+            pipeline.regressor.skeleton.skeleton.clone(),
+            1.0 / fps,
+            Vec::new(),
+        )?;
+        Ok(Take { motion, path })
+    }
+
+    pub fn push(&mut self, frame: &[f32]) -> anyhow::Result<()> {
+        Ok(self.motion.push_frame(frame)?)
+    }
+
+    pub fn frames(&self) -> usize {
+        self.motion.frame_count()
+    }
+
+    /// Writes the take (atomically) and returns its path.
+    pub fn write(&self) -> anyhow::Result<&Path> {
+        self.motion.write(&self.path)?;
+        Ok(&self.path)
+    }
+}
+
+/// What `run` writes besides the take.
+struct RunOutputs {
+    frames_dir: PathBuf,
+    preview: Option<GifPreview>,
+    rows: String,
+}
+
+impl RunOutputs {
+    fn new(out: &Path, fps: f64) -> anyhow::Result<RunOutputs> {
+        let frames_dir = out.join("frames");
+        std::fs::create_dir_all(&frames_dir)
+            .with_context(|| format!("cannot create {}", frames_dir.display()))?;
+        let settings = PreviewSettings {
+            fps: fps as f32,
+            ..PreviewSettings::default()
+        };
+        Ok(RunOutputs {
+            frames_dir,
+            preview: Some(GifPreview::create(&out.join("preview.gif"), settings)?),
+            rows: String::from(
+                "frame,person,markers,garment,strain_p95,penetration_cm,segment_ms,describe_ms,regress_ms,cloth_ms,render_ms,composite_ms\n",
+            ),
+        })
+    }
+
+    fn add(&mut self, out: &Output) -> anyhow::Result<()> {
+        let path = self.frames_dir.join(format!("{:06}.png", out.index));
+        write_png(&out.image, &path)?;
+        if let Some(preview) = &mut self.preview {
+            preview.push(&out.image)?;
+        }
+        let t = out.times;
+        let (strain, depth) = out
+            .cloth
+            .quality
+            .map_or((String::new(), String::new()), |q| {
+                (format!("{:.5}", q.strain_p95), format!("{:.3}", q.penetration_cm))
+            });
+        self.rows.push_str(&format!(
+            "{},{},{},{},{strain},{depth},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}\n",
+            out.index,
+            out.pose.person as u8,
+            out.pose.markers.len(),
+            status_name(&out.cloth.status),
+            t.segment,
+            t.describe,
+            t.regress,
+            t.cloth,
+            t.render,
+            t.composite
+        ));
+        Ok(())
+    }
+
+    fn finish(mut self, out: &Path) -> anyhow::Result<()> {
+        if let Some(preview) = self.preview.take() {
+            preview.finish()?;
+        }
+        let path = out.join("frames.csv");
+        suitcap::io::write_atomic(&path, self.rows.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))
+    }
+}
+
+fn status_name(status: &ClothStatus) -> &'static str {
+    match status {
+        ClothStatus::Worn => "worn",
+        ClothStatus::Sizing { .. } => "measuring",
+        ClothStatus::NoPerson => "hidden",
+        ClothStatus::Off => "off",
+    }
+}
+
+/// Writes a PNG to a temporary name and renames it.
+pub fn write_png(image: &RgbImage, path: &Path) -> anyhow::Result<()> {
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new_with_quality(
+        &mut bytes,
+        image::codecs::png::CompressionType::Fast,
+        image::codecs::png::FilterType::Sub,
+    )
+    .write_image(image.as_raw(), image.width(), image.height(), image::ExtendedColorType::Rgb8)
+    .with_context(|| format!("cannot encode {}", path.display()))?;
+    suitcap::io::write_atomic(path, &bytes).with_context(|| format!("cannot write {}", path.display()))
+}
+
+use image::ImageEncoder;
+
+/// `suitcap run`: the whole pipeline on a recorded input.
+pub fn run(
+    input: &str,
+    suit_dir: &Path,
+    out: &Path,
+    camera: Option<&PathBuf>,
+    garment: &GarmentArgs,
+    pose: &PoseArgs,
+) -> anyhow::Result<()> {
+    let camera = camera_for(input, suit_dir, camera)?;
+    let pose_stage = pose_stage(suit_dir, pose)?;
+    let mode = if garment.live_cloth {
+        SimulationMode::Live
+    } else {
+        SimulationMode::Quality
+    };
+    let cloth = cloth_stage(garment, &pose_stage.pipeline.regressor.skeleton.skeleton, mode)?;
+    let render = render_stage(&pose_stage.pipeline);
+    // Open once here to check the size and learn the rate; the capture thread opens its own.
+    let probe = open_source(input, &SourceOptions::default())?;
+    let size = probe.size();
+    if size != (camera.intrinsics.width, camera.intrinsics.height) {
+        bail!(
+            "{input} is {}x{}, but the camera is calibrated for {}x{}",
+            size.0,
+            size.1,
+            camera.intrinsics.width,
+            camera.intrinsics.height
+        );
+    }
+    let fps = probe.frame_rate().unwrap_or(30.0);
+    let total = count_frames(input);
+    drop(probe);
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let mut take = Take::new(&pose_stage.pipeline, fps, out.join("take.bvh"))?;
+    let mut outputs = RunOutputs::new(out, fps)?;
+    let controls = Controls::new(parse_overlays(&garment.overlays)?);
+    stop_on_signals(&controls);
+    let bar = match total {
+        Some(n) => indicatif::ProgressBar::new(n),
+        None => indicatif::ProgressBar::new_spinner(),
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut timings = TimingLog::default();
+    let (mut nobody, mut failure) = (0usize, None::<anyhow::Error>);
+    let input_owned = input.to_owned();
+    let summary = runner::run(
+        move || open_source(&input_owned, &SourceOptions::default()).map(|s| s as Box<dyn FrameSource>),
+        InputKind::Recorded,
+        camera,
+        pose_stage,
+        cloth,
+        render,
+        Arc::clone(&controls),
+        Vec::new,
+        |output| {
+            nobody += (!output.pose.person) as usize;
+            timings.push(output.times);
+            if let Some(e) = &output.cloth_error {
+                bar.println(format!("frame {}: garment: {e}", output.index));
+            }
+            let result = take
+                .push(&output.pose.frame)
+                .and_then(|()| outputs.add(&output));
+            bar.inc(1);
+            match result {
+                Ok(()) => true,
+                Err(e) => {
+                    failure = Some(e.context(format!("frame {}", output.index)));
+                    false
+                }
+            }
+        },
+    );
+    bar.finish_and_clear();
+    let bvh = take.write()?;
+    outputs.finish(out)?;
+    report(&summary, take.frames(), nobody, bvh, &timings);
+    println!(
+        "composited frames: {}/frames/  preview: {}/preview.gif  per-frame table: {}/frames.csv",
+        out.display(),
+        out.display(),
+        out.display()
+    );
+    finish(summary, failure, bvh)
+}
+
+fn count_frames(input: &str) -> Option<u64> {
+    let path = Path::new(input);
+    path.is_dir()
+        .then(|| suitcap::source::directory::list_frame_files(path).ok())
+        .flatten()
+        .map(|files| files.len() as u64)
+}
+
+fn report(summary: &RunSummary, frames: usize, nobody: usize, bvh: &Path, timings: &TimingLog) {
+    println!(
+        "{frames} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped; {} camera frames dropped; {:.1} s ({:.1} frames/s)",
+        bvh.display(),
+        summary.skipped.len(),
+        summary.dropped,
+        summary.seconds,
+        frames as f64 / summary.seconds.max(1e-9)
+    );
+    for s in &summary.skipped {
+        println!("  skipped: {s}");
+    }
+    print!("{}", timings.summary());
+}
+
+/// The exit status: an error for a failed source or output, after everything recorded was written.
+fn finish(summary: RunSummary, failure: Option<anyhow::Error>, bvh: &Path) -> anyhow::Result<()> {
+    if let Some(e) = failure {
+        return Err(e.context(format!(
+            "stopped early; the frames before were written ({})",
+            bvh.display()
+        )));
+    }
+    if let Some(e) = summary.source_error {
+        bail!(
+            "the input failed: {e}; the {} frames before it are in {}",
+            summary.frames,
+            bvh.display()
+        );
+    }
+    if summary.stopped_by_user {
+        println!("stopped by signal; the take is complete up to the last processed frame");
+    }
+    Ok(())
+}
+
+/// `suitcap demo`: the bundled footage through the whole pipeline, compared with its ground truth.
+pub fn demo(suit_dir: &Path, out: &Path) -> anyhow::Result<()> {
+    let footage = suit_dir.join("demo/640x480");
+    let frames = footage.join("frames");
+    if !frames.is_dir() {
+        bail!(
+            "{} has no bundled demo footage ({} is missing)",
+            suit_dir.display(),
+            frames.display()
+        );
+    }
+    let garment = GarmentArgs {
+        garment: "tshirt".to_owned(),
+        material: "medium".to_owned(),
+        live_cloth: false,
+        overlays: Vec::new(),
+    };
+    let pose = PoseArgs {
+        no_smoothing: false,
+        no_limits: false,
+    };
+    let input = frames.to_string_lossy().into_owned();
+    let camera = footage.join("camera.toml");
+    run(&input, suit_dir, out, Some(&camera), &garment, &pose)?;
+    let truth = Motion::load(&footage.join("motion.bvh"))?;
+    let take = Motion::load(&out.join("take.bvh"))?;
+    let suit = suitcap::suit::SuitDefinition::load_dir(suit_dir)?;
+    let layout = suitcap::pose::PoseLayout::new(&suit.skeleton, &truth.skeleton)?;
+    let mut errors = suitcap::pose::eval::JointErrors::new(
+        suit.skeleton.joints.iter().map(|j| j.name.clone()).collect(),
+    );
+    for k in 0..truth.frame_count().min(take.frame_count()) {
+        errors.add(&layout, truth.frame(k), take.frame(k));
+    }
+    println!(
+        "against the ground truth of the bundled clip (a motion the suit was not trained on): mean joint angle error {:.1}° (Euler), {:.1}° (geodesic) over {} frames",
+        errors.mean_euler(),
+        errors.mean_geodesic(),
+        errors.frames
+    );
+    Ok(())
+}
+
+/// `suitcap drape`: a garment simulated on a given motion, composited into the given frames.
+#[allow(clippy::too_many_arguments)]
+pub fn drape(
+    motion_path: &Path,
+    camera_path: &Path,
+    frames_dir: &Path,
+    masks: Option<&PathBuf>,
+    out: &Path,
+    garment: &GarmentArgs,
+) -> anyhow::Result<()> {
+    use suitcap::body_size::{BodySize, BodySizeEstimator};
+    use suitcap::mask::Mask;
+    let motion = Motion::load(motion_path)?;
+    let camera = Camera::load(camera_path)?;
+    let mut source = suitcap::source::directory::DirectorySource::open(frames_dir, 30.0)?;
+    let template = motion.skeleton.clone();
+    let mode = if garment.live_cloth {
+        SimulationMode::Live
+    } else {
+        SimulationMode::Quality
+    };
+    // Body size from the silhouettes: the given masks, else the masks/ beside the frames.
+    let masks_dir = masks.cloned().or_else(|| {
+        let beside = frames_dir.parent()?.join("masks");
+        beside.is_dir().then_some(beside)
+    });
+    let size = match &masks_dir {
+        Some(dir) => {
+            let body = suitcap::body_size::template_body(&template)?;
+            let mut estimator = BodySizeEstimator::new();
+            let count = motion.frame_count();
+            for k in (0..count).step_by((count / 40).max(1)) {
+                let path = dir.join(format!("{k:06}.png"));
+                let Ok(grey) = image::open(&path).map(|i| i.to_luma8()) else {
+                    continue;
+                };
+                estimator.add_frame(&Mask::from_gray(&grey), &body, &template, motion.frame(k), &camera);
+            }
+            let size = estimator.estimate();
+            println!(
+                "body size from {} silhouettes in {}: height {:.1} cm (×{:.3} the motion's skeleton), girth {:.2}",
+                size.frames,
+                dir.display(),
+                size.height_cm(&template),
+                size.height_scale,
+                size.girth
+            );
+            size
+        }
+        None => {
+            println!("no masks: the garment is sized for the motion's skeleton at girth 1");
+            BodySize::TEMPLATE
+        }
+    };
+    if let Some(truth) = frames_dir
+        .parent()
+        .map(|d| d.join("manifest.toml"))
+        .filter(|p| p.is_file())
+        .and_then(|p| suitcap::dataset::Manifest::load(&p).ok())
+    {
+        println!(
+            "  ground truth (generator's subject {}): height {:.1} cm, girth {:.2}",
+            truth.subject.name, truth.subject.height_cm, truth.subject.girth
+        );
+    }
+    if garment.garment.eq_ignore_ascii_case("none") {
+        bail!("--garment none: drape needs a garment");
+    }
+    let mut options = ClothOptions::new(GarmentChoice::parse(&garment.garment)?, mode);
+    options.material = material(&garment.material)?;
+    options.known_size = Some(size);
+    let mut stage = ClothStage::new(&template, options)?;
+    let mut render = RenderStage::new(RenderSettings::default(), Vec::new());
+    let overlays = parse_overlays(&garment.overlays)?;
+    let out_frames = out.join("frames");
+    std::fs::create_dir_all(&out_frames)
+        .with_context(|| format!("cannot create {}", out_frames.display()))?;
+    let fps = motion.frame_rate();
+    let mut preview = GifPreview::create(
+        &out.join("preview.gif"),
+        PreviewSettings {
+            fps: fps as f32,
+            ..PreviewSettings::default()
+        },
+    )?;
+    let empty = Mask::empty(camera.intrinsics.width, camera.intrinsics.height);
+    let mut quality = Vec::new();
+    let (mut cloth_ms, mut render_ms, mut skipped) = (Vec::new(), Vec::new(), Vec::new());
+    let mut vertices = 0;
+    let bar = indicatif::ProgressBar::new(motion.frame_count() as u64);
+    for k in 0..motion.frame_count() {
+        let mut image = match source.next_frame() {
+            Ok(Some(frame)) => frame.image,
+            Ok(None) => break,
+            Err(e) => {
+                skipped.push(e.to_string());
+                continue;
+            }
+        };
+        let cloth = stage.advance(motion.frame(k), k as f64 / fps, true, &empty, &camera)?;
+        vertices = cloth.positions.len();
+        if let Some(q) = cloth.quality {
+            quality.push(q);
+        }
+        cloth_ms.push(cloth.milliseconds);
+        let pose = suitcap::tryon::PoseOverlay::new(None, Vec::new(), &template, motion.frame(k), &camera);
+        let (r, c) = render.draw(&mut image, &camera, &cloth, &pose, overlays, &[], &[])?;
+        render_ms.push(r + c);
+        write_png(&image, &out_frames.join(format!("{k:06}.png")))?;
+        preview.push(&image)?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    preview.finish()?;
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    };
+    let worst = |f: fn(&suitcap::cloth::solver::FrameQuality) -> f32| {
+        quality.iter().map(f).fold(0.0f32, f32::max)
+    };
+    let mut p95s: Vec<f32> = quality.iter().map(|q| q.strain_p95).collect();
+    p95s.sort_by(f32::total_cmp);
+    println!(
+        "{} frames of {} ({} vertices, {:?} mode, {}) → {}/frames/ and {}/preview.gif; {} unreadable frames skipped",
+        quality.len(),
+        stage.garment().name(),
+        vertices,
+        mode,
+        garment.material,
+        out.display(),
+        out.display(),
+        skipped.len()
+    );
+    for s in &skipped {
+        println!("  skipped: {s}");
+    }
+    println!(
+        "quality: edge strain 95th percentile median {:.2} % (worst frame {:.2} %), maximum {:.2} %; deepest vertex inside a capsule at a frame's end {:.2} mm",
+        p95s.get(p95s.len() / 2).copied().unwrap_or(0.0) * 100.0,
+        worst(|q| q.strain_p95) * 100.0,
+        worst(|q| q.strain_max) * 100.0,
+        worst(|q| q.penetration_cm) * 10.0
+    );
+    println!(
+        "time: cloth {:.2} ms, render + composite {:.2} ms per frame (medians)",
+        median(&mut cloth_ms),
+        median(&mut render_ms)
+    );
+    Ok(())
+}
+
+/// `suitcap live`: the camera with the garment, in a window.
+#[allow(clippy::too_many_arguments)]
+pub fn live(
+    device: &str,
+    suit_dir: &Path,
+    camera: Option<&PathBuf>,
+    size: Option<(u32, u32)>,
+    fps: Option<f64>,
+    record: Option<&PathBuf>,
+    garment: &GarmentArgs,
+    pose: &PoseArgs,
+) -> anyhow::Result<()> {
+    use minifb::{Key, KeyRepeat, Window, WindowOptions};
+    let camera = camera_for(device, suit_dir, camera)?;
+    let options = SourceOptions {
+        size: size.or(Some((camera.intrinsics.width, camera.intrinsics.height))),
+        fps,
+        ..SourceOptions::default()
+    };
+    let probe = open_source(device, &options)?;
+    let actual = probe.size();
+    let rate = probe.frame_rate().unwrap_or(30.0);
+    let described = probe.describe();
+    drop(probe);
+    if actual != (camera.intrinsics.width, camera.intrinsics.height) {
+        bail!(
+            "{device} gives {}x{} frames, but the camera calibration is for {}x{}: pass --camera with a calibration at the camera's size",
+            actual.0,
+            actual.1,
+            camera.intrinsics.width,
+            camera.intrinsics.height
+        );
+    }
+    let pose_stage = pose_stage(suit_dir, pose)?;
+    let cloth = cloth_stage(garment, &pose_stage.pipeline.regressor.skeleton.skeleton, SimulationMode::Live)?;
+    let render = render_stage(&pose_stage.pipeline);
+    let mut window = Window::new(
+        &format!("suitcap live — {described}"),
+        actual.0 as usize,
+        actual.1 as usize,
+        WindowOptions::default(),
+    )
+    .map_err(|e| {
+        anyhow::anyhow!(
+            "cannot open a preview window ({e}); `live` needs a desktop session (DISPLAY), `suitcap run` works without one"
+        )
+    })?;
+    let overlays = parse_overlays(&garment.overlays)?;
+    let controls = Controls::new(overlays);
+    stop_on_signals(&controls);
+    // Recording: --record starts at once; R starts and stops; every stop writes its take.
+    let base = record.cloned().unwrap_or_else(|| PathBuf::from("take.bvh"));
+    let mut takes_written: Vec<(PathBuf, usize)> = Vec::new();
+    let mut recording: Option<Take> = match record {
+        Some(path) => Some(Take::new(&pose_stage.pipeline, rate, path.clone())?),
+        None => None,
+    };
+    let template_pipeline_skeleton = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
+    let recording_flag = Arc::new(std::sync::atomic::AtomicBool::new(recording.is_some()));
+    let banner_flag = Arc::clone(&recording_flag);
+    let mut timings = TimingLog::default();
+    let mut buffer: Vec<u32> = Vec::new();
+    let mut garment_choice = GarmentChoice::parse(&garment.garment).unwrap_or(GarmentChoice::Procedural(
+        suitcap::cloth::garment::GarmentKind::TShirt,
+    ));
+    let mut failure: Option<anyhow::Error> = None;
+    let device_owned = device.to_owned();
+    println!("keys: G garment · M mask · K markers · S skeleton · T timings · R record on/off · Esc/Q quit");
+    let summary = runner::run(
+        move || open_source(&device_owned, &options).map(|s| s as Box<dyn FrameSource>),
+        InputKind::Live,
+        camera,
+        pose_stage,
+        cloth,
+        render,
+        Arc::clone(&controls),
+        move || {
+            if banner_flag.load(Ordering::Relaxed) {
+                vec!["REC".to_owned()]
+            } else {
+                Vec::new()
+            }
+        },
+        |output| {
+            timings.push(output.times);
+            if let Some(take) = &mut recording {
+                if let Err(e) = take.push(&output.pose.frame) {
+                    failure = Some(e);
+                    return false;
+                }
+            }
+            buffer.clear();
+            buffer.extend(output.image.pixels().map(|p| {
+                let [r, g, b] = p.0;
+                (r as u32) << 16 | (g as u32) << 8 | b as u32
+            }));
+            let (w, h) = output.image.dimensions();
+            if window.update_with_buffer(&buffer, w as usize, h as usize).is_err() || !window.is_open() {
+                return false;
+            }
+            for key in window.get_keys_pressed(KeyRepeat::No) {
+                let mut o = controls.overlays();
+                match key {
+                    Key::Escape | Key::Q => return false,
+                    Key::M => o.mask = !o.mask,
+                    Key::K => o.markers = !o.markers,
+                    Key::S => o.skeleton = !o.skeleton,
+                    Key::T => o.timings = !o.timings,
+                    Key::G => {
+                        garment_choice = garment_choice.next();
+                        controls.switch_garment(garment_choice.clone());
+                    }
+                    Key::R => match recording.take() {
+                        Some(take) => match take.write() {
+                            Ok(path) => {
+                                println!("recorded {} frames → {}", take.frames(), path.display());
+                                takes_written.push((path.to_owned(), take.frames()));
+                            }
+                            Err(e) => {
+                                failure = Some(e);
+                                return false;
+                            }
+                        },
+                        None => {
+                            let path = numbered(&base, takes_written.len());
+                            match Take::new_for(&template_pipeline_skeleton, rate, path) {
+                                Ok(take) => recording = Some(take),
+                                Err(e) => eprintln!("cannot start recording: {e:#}"),
+                            }
+                        }
+                    },
+                    _ => {}
+                }
+                recording_flag.store(recording.is_some(), Ordering::Relaxed);
+                controls.set_overlays(o);
+            }
+            true
+        },
+    );
+    if let Some(take) = recording.take() {
+        let path = take.write()?;
+        println!("recorded {} frames → {}", take.frames(), path.display());
+    }
+    println!(
+        "{} frames shown, {} camera frames dropped (the pipeline was behind), {} corrupt frames skipped",
+        summary.frames,
+        summary.dropped,
+        summary.skipped.len()
+    );
+    print!("{}", timings.summary());
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    if let Some(e) = summary.source_error {
+        bail!("the camera failed: {e}; everything recorded before it was written");
+    }
+    Ok(())
+}
+
+/// `take.bvh`, then `take-2.bvh`, `take-3.bvh`, …
+fn numbered(base: &Path, index: usize) -> PathBuf {
+    if index == 0 {
+        return base.to_owned();
+    }
+    let stem = base.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    base.with_file_name(format!("{stem}-{}.bvh", index + 1))
+}
+
+impl Take {
+    fn new_for(skeleton: &suitcap::skeleton::Skeleton, fps: f64, path: PathBuf) -> anyhow::Result<Take> {
+        Ok(Take {
+            motion: Motion::new(skeleton.clone(), 1.0 / fps, Vec::new())?,
+            path,
+        })
+    }
+}
+
+/// Frames of a directory decoded into memory (for the benchmark).
+pub fn load_frames(dir: &Path) -> anyhow::Result<Vec<RgbImage>> {
+    let mut source = suitcap::source::directory::DirectorySource::open(dir, 30.0)?;
+    let mut frames = Vec::new();
+    while let Some(frame) = source.next_frame()? {
+        frames.push(frame.image);
+    }
+    Ok(frames)
+}

@@ -1,0 +1,1324 @@
+//! Procedural garments sized from the body in its rest pose: a T-shirt, a skirt and a dress.
+//!
+//! Every garment is generated around the subject's body in the rest pose (all channels zero: the
+//! shipped CMU/Daz skeleton stands in a T-pose at the origin, arms along ±X, facing +Z), from the same
+//! inflated collision capsules the solver uses, so the subject's size drives the garment:
+//!
+//! - **Rings.** A garment is a stack of horizontal rings. At each height the torso capsules' cross
+//!   sections (discs) are fitted by an ellipse centred on the body's mid-plane that contains all of
+//!   them (semi-axes from the extreme discs, then scaled up until the ellipse's support function
+//!   bounds every disc's in 72 directions), plus the ease. Ring vertices are spaced evenly by arc
+//!   length, one edge length apart; rings one edge length apart.
+//! - **T-shirt.** A torso tube from just below the hip joint to shoulder height whose width never
+//!   shrinks going down (it hangs straight from the chest). Above the armpit the columns beyond
+//!   `x_cut` on each side are left out — the armholes, wide enough front to back for the upper arm —
+//!   leaving a front and a back panel. Shoulder straps join each front column to its mirror column at
+//!   the back along a half-ellipse over the shoulder, as low as clears the capsules; the columns
+//!   within the neck's reach stay open: the neck hole. A short sleeve tube is welded to each armhole
+//!   (its first ring *is* the armhole's boundary loop, so the mesh is one connected piece) and
+//!   blends in two rings to a circle around the upper arm, ending about half-way to the elbow.
+//! - **Skirt.** Rings from the waist (70 % of the way from the hip joint to the abdomen joint) to just
+//!   above the knees, flaring by 12° and never narrower than the hips and thighs below; each ring has
+//!   as many vertices as its perimeter needs, and neighbouring rings are stitched by walking both in
+//!   step by arc-length fraction.
+//! - **Dress.** The T-shirt's bodice (fitted: following the body's cross-sections) from the natural
+//!   waist (the abdomen joint) up, with armholes and straps but no sleeves, continued below the waist
+//!   by the skirt's flared rings, all in one mesh.
+//!
+//! Triangles are wound so that `(b − a) × (c − a)` points away from the body, consistently across
+//! the whole mesh. Finally every vertex still closer than half the ease to a capsule (a disc between
+//! fitted directions, a sleeve over the arm) is pushed out to that distance.
+//!
+//! **Anchors** are vertices bound rigidly to a bone (bone index, position in the bone's frame at
+//! rest): for the T-shirt the neckline loop and its neighbours (chest bone), for the skirt the
+//! waistband's two top rings (hip bone), for the dress its waist ring (hip) and neckline (chest).
+//!
+//! Hands to the solver: a [`GarmentMesh`] — rest positions in world centimetres, triangles, anchors.
+
+use std::f32::consts::{PI, TAU};
+use std::str::FromStr;
+
+use glam::{Affine3A, Vec2, Vec3};
+
+use super::capsule::{Capsule, PreparedCapsule};
+use super::proxies::{BodyPose, BodyRig};
+use super::topology::{boundary_loops, unique_edges, Adjacency};
+
+/// A vertex bound rigidly to a bone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Anchor {
+    pub vertex: u32,
+    /// Joint index in the rig's skeleton.
+    pub bone: usize,
+    /// Position in the bone's local frame (its rest position mapped through the bone's rest inverse).
+    pub local: Vec3,
+}
+
+/// A garment's rest shape: positions in rest-pose world centimetres, outward-wound triangles, anchors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GarmentMesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+    pub anchors: Vec<Anchor>,
+}
+
+/// The procedural garments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GarmentKind {
+    TShirt,
+    Skirt,
+    Dress,
+}
+
+impl GarmentKind {
+    pub const ALL: [GarmentKind; 3] = [GarmentKind::TShirt, GarmentKind::Skirt, GarmentKind::Dress];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            GarmentKind::TShirt => "tshirt",
+            GarmentKind::Skirt => "skirt",
+            GarmentKind::Dress => "dress",
+        }
+    }
+}
+
+impl FromStr for GarmentKind {
+    type Err = GarmentError;
+
+    fn from_str(s: &str) -> Result<GarmentKind, GarmentError> {
+        GarmentKind::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(s) || (s.eq_ignore_ascii_case("t-shirt") && *k == GarmentKind::TShirt))
+            .ok_or_else(|| GarmentError::UnknownKind(s.to_owned()))
+    }
+}
+
+/// How finely and loosely a garment is cut.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GarmentParams {
+    /// Target edge length, cm.
+    pub edge_cm: f32,
+    /// Ease: how far the cloth stands off the body's proxies at rest, cm.
+    pub ease_cm: f32,
+}
+
+impl GarmentParams {
+    /// Live mode: 2 cm edges.
+    pub fn live() -> GarmentParams {
+        GarmentParams {
+            edge_cm: 2.0,
+            ease_cm: 2.5,
+        }
+    }
+
+    /// Quality mode: 1 cm edges (about four times the vertices).
+    pub fn quality() -> GarmentParams {
+        GarmentParams {
+            edge_cm: 1.0,
+            ..GarmentParams::live()
+        }
+    }
+}
+
+impl Default for GarmentParams {
+    fn default() -> GarmentParams {
+        GarmentParams::live()
+    }
+}
+
+/// Why a garment cannot be made or used.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum GarmentError {
+    #[error("unknown garment '{0}' (expected tshirt, skirt or dress)")]
+    UnknownKind(String),
+    #[error("the body has no part '{0}' (procedural garments need the parts Body::new builds)")]
+    MissingPart(&'static str),
+    #[error("the skeleton has no joint '{0}' (procedural garments need the CMU/Daz joint names)")]
+    MissingJoint(&'static str),
+    #[error("edge length {0} cm is not a positive number (e.g. 2 for live, 1 for quality)")]
+    BadEdge(f32),
+    #[error("ease {0} cm is not a non-negative number")]
+    BadEase(f32),
+    #[error("garment '{name}': {message}")]
+    Invalid { name: String, message: String },
+}
+
+impl GarmentMesh {
+    /// A procedural garment for the rig's body.
+    pub fn generate(
+        kind: GarmentKind,
+        rig: &BodyRig,
+        params: &GarmentParams,
+    ) -> Result<GarmentMesh, GarmentError> {
+        if !(params.edge_cm > 0.05 && params.edge_cm.is_finite()) {
+            return Err(GarmentError::BadEdge(params.edge_cm));
+        }
+        if !(params.ease_cm >= 0.0 && params.ease_cm.is_finite()) {
+            return Err(GarmentError::BadEase(params.ease_cm));
+        }
+        let rest = Rest::new(rig);
+        let mesh = match kind {
+            GarmentKind::TShirt => tshirt(&rest, params)?,
+            GarmentKind::Skirt => skirt(&rest, params)?,
+            GarmentKind::Dress => dress(&rest, params)?,
+        };
+        mesh.validate()?;
+        Ok(mesh)
+    }
+
+    /// The garment with the edge length that brings its vertex count nearest `target`; returns it
+    /// with that edge length.
+    pub fn with_vertex_count(
+        kind: GarmentKind,
+        rig: &BodyRig,
+        target: usize,
+        ease_cm: f32,
+    ) -> Result<(GarmentMesh, f32), GarmentError> {
+        let mut edge = 2.0f32;
+        let mut best: Option<(GarmentMesh, f32)> = None;
+        for _ in 0..5 {
+            let mesh = GarmentMesh::generate(
+                kind,
+                rig,
+                &GarmentParams {
+                    edge_cm: edge,
+                    ease_cm,
+                },
+            )?;
+            let n = mesh.positions.len().max(1);
+            let better = best
+                .as_ref()
+                .is_none_or(|(b, _)| n.abs_diff(target) < b.positions.len().abs_diff(target));
+            let next = edge * (n as f32 / target.max(1) as f32).sqrt();
+            if better {
+                best = Some((mesh, edge));
+            }
+            if n.abs_diff(target) * 100 < target {
+                break;
+            }
+            edge = next;
+        }
+        best.ok_or(GarmentError::BadEdge(edge))
+    }
+
+    /// A flat rectangular sheet of `columns × rows` quads from `corner`, spanning `along` and `down`
+    /// (no anchors). For tests and demonstrations.
+    pub fn sheet(
+        name: &str,
+        corner: Vec3,
+        along: Vec3,
+        down: Vec3,
+        columns: usize,
+        rows: usize,
+    ) -> GarmentMesh {
+        let (columns, rows) = (columns.max(1), rows.max(1));
+        let mut positions = Vec::with_capacity((columns + 1) * (rows + 1));
+        for r in 0..=rows {
+            for c in 0..=columns {
+                positions.push(
+                    corner
+                        + along * (c as f32 / columns as f32)
+                        + down * (r as f32 / rows as f32),
+                );
+            }
+        }
+        let id = |r: usize, c: usize| (r * (columns + 1) + c) as u32;
+        let mut triangles = Vec::with_capacity(2 * rows * columns);
+        for r in 0..rows {
+            for c in 0..columns {
+                let (a, b, cc, d) = (id(r, c), id(r, c + 1), id(r + 1, c + 1), id(r + 1, c));
+                if (r + c) % 2 == 0 {
+                    triangles.push([a, cc, b]);
+                    triangles.push([a, d, cc]);
+                } else {
+                    triangles.push([a, d, b]);
+                    triangles.push([b, d, cc]);
+                }
+            }
+        }
+        GarmentMesh {
+            name: name.to_owned(),
+            positions,
+            triangles,
+            anchors: Vec::new(),
+        }
+    }
+
+    /// Index of the vertex at row `r`, column `c` of a [`GarmentMesh::sheet`] with `columns` quads
+    /// per row.
+    pub fn sheet_vertex(columns: usize, r: usize, c: usize) -> u32 {
+        (r * (columns.max(1) + 1) + c) as u32
+    }
+
+    /// Checks indices, finiteness and degenerate triangles.
+    pub fn validate(&self) -> Result<(), GarmentError> {
+        let invalid = |message: String| GarmentError::Invalid {
+            name: self.name.clone(),
+            message,
+        };
+        if self.triangles.is_empty() {
+            return Err(invalid("no triangles".into()));
+        }
+        let n = self.positions.len();
+        if let Some(v) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(invalid(format!("vertex {v} is not finite")));
+        }
+        for (k, t) in self.triangles.iter().enumerate() {
+            if t.iter().any(|&v| v as usize >= n) {
+                return Err(invalid(format!(
+                    "triangle {k} {t:?} refers past the {n} vertices"
+                )));
+            }
+            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+                return Err(invalid(format!("triangle {k} {t:?} repeats a vertex")));
+            }
+        }
+        for a in &self.anchors {
+            if a.vertex as usize >= n || !a.local.is_finite() {
+                return Err(invalid(format!("anchor {a:?} is invalid")));
+            }
+        }
+        Ok(())
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The rest pose.
+
+/// The body in its rest pose, as the generators see it.
+struct Rest<'a> {
+    rig: &'a BodyRig,
+    pose: BodyPose,
+    prepared: Vec<PreparedCapsule>,
+}
+
+impl<'a> Rest<'a> {
+    fn new(rig: &'a BodyRig) -> Rest<'a> {
+        let mut pose = BodyPose::default();
+        rig.pose(&rig.rest_frame(), &mut pose);
+        let prepared = pose.capsules.iter().map(Capsule::prepared).collect();
+        Rest {
+            rig,
+            pose,
+            prepared,
+        }
+    }
+
+    fn joint(&self, name: &'static str) -> Result<usize, GarmentError> {
+        self.rig
+            .skeleton()
+            .find(name)
+            .ok_or(GarmentError::MissingJoint(name))
+    }
+
+    fn joint_position(&self, name: &'static str) -> Result<Vec3, GarmentError> {
+        let j = self.joint(name)?;
+        Ok(Vec3::from(self.pose.bones[j].translation))
+    }
+
+    fn part_name(&self, capsule: usize) -> &'static str {
+        let part = self.rig.proxies()[capsule].part;
+        self.rig.body().parts[part].name
+    }
+
+    /// Posed capsules of the named parts; every name must exist.
+    fn capsules_of(&self, parts: &[&'static str]) -> Result<Vec<Capsule>, GarmentError> {
+        for &name in parts {
+            if !self.rig.body().parts.iter().any(|p| p.name == name) {
+                return Err(GarmentError::MissingPart(name));
+            }
+        }
+        Ok(self
+            .pose
+            .capsules
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| parts.contains(&self.part_name(*k)))
+            .map(|(_, c)| *c)
+            .collect())
+    }
+
+    /// Smallest signed distance to any capsule of a part not excluded.
+    fn clearance(&self, p: Vec3, exclude: &[&str]) -> f32 {
+        self.prepared
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| !exclude.contains(&self.part_name(*k)))
+            .map(|(_, c)| c.distance(p.into()))
+            .fold(f32::INFINITY, f32::min)
+    }
+
+    fn bone_local(&self, bone: usize, p: Vec3) -> Vec3 {
+        self.pose.bones[bone].inverse().transform_point3(p)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cross-sections and rings.
+
+/// Discs where the horizontal plane at `y` cuts the capsules: (centre (x, z), radius).
+fn section(capsules: &[Capsule], y: f32) -> Vec<(Vec2, f32)> {
+    const SAMPLES: usize = 32;
+    let mut out = Vec::new();
+    for c in capsules {
+        for k in 0..=SAMPLES {
+            let t = k as f32 / SAMPLES as f32;
+            let centre = c.a.lerp(c.b, t);
+            let r = c.radius_a + (c.radius_b - c.radius_a) * t;
+            let dy = y - centre.y;
+            if dy.abs() < r {
+                out.push((Vec2::new(centre.x, centre.z), (r * r - dy * dy).sqrt()));
+            }
+        }
+    }
+    out
+}
+
+/// Semi-axes of an ellipse centred at (0, zc) containing every disc.
+fn fit_ellipse(discs: &[(Vec2, f32)], zc: f32) -> Option<Vec2> {
+    if discs.is_empty() {
+        return None;
+    }
+    let mut a0 = 0.0f32;
+    let mut b0 = 0.0f32;
+    for (c, r) in discs {
+        a0 = a0.max(c.x.abs() + r);
+        b0 = b0.max((c.y - zc).abs() + r);
+    }
+    let (a0, b0) = (a0.max(1.0), b0.max(1.0));
+    let mut scale = 1.0f32;
+    const DIRECTIONS: usize = 72;
+    for k in 0..DIRECTIONS {
+        let (s, co) = (TAU * k as f32 / DIRECTIONS as f32).sin_cos();
+        let support = ((a0 * co).powi(2) + (b0 * s).powi(2)).sqrt();
+        for (c, r) in discs {
+            scale = scale.max((c.x * co + (c.y - zc) * s + r) / support);
+        }
+    }
+    Some(Vec2::new(a0, b0) * scale)
+}
+
+/// Ramanujan's perimeter of an ellipse with semi-axes `s`.
+fn ellipse_perimeter(s: Vec2) -> f32 {
+    let (a, b) = (s.x, s.y);
+    let h = ((a - b) / (a + b)).powi(2);
+    PI * (a + b) * (1.0 + 3.0 * h / (10.0 + (4.0 - 3.0 * h).sqrt()))
+}
+
+/// `n` points evenly spaced by arc length on the ellipse (x = a cos θ, z = zc + b sin θ) at height
+/// `y`, from θ = 0 (+X) towards +Z.
+fn ellipse_ring(y: f32, zc: f32, semi: Vec2, n: usize) -> Vec<Vec3> {
+    const STEPS: usize = 512;
+    let mut table = [0.0f32; STEPS + 1];
+    let step = TAU / STEPS as f32;
+    for k in 1..=STEPS {
+        let mid = (k as f32 - 0.5) * step;
+        let speed = ((semi.x * mid.sin()).powi(2) + (semi.y * mid.cos()).powi(2)).sqrt();
+        table[k] = table[k - 1] + speed * step;
+    }
+    let total = table[STEPS];
+    (0..n)
+        .map(|k| {
+            let target = total * k as f32 / n as f32;
+            let i = table.partition_point(|&a| a < target).clamp(1, STEPS);
+            let (a0, a1) = (table[i - 1], table[i]);
+            let frac = if a1 > a0 { (target - a0) / (a1 - a0) } else { 0.0 };
+            let theta = (i as f32 - 1.0 + frac) * step;
+            Vec3::new(semi.x * theta.cos(), y, zc + semi.y * theta.sin())
+        })
+        .collect()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Mesh building.
+
+#[derive(Default)]
+struct Builder {
+    positions: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Builder {
+    fn vertex(&mut self, p: Vec3) -> u32 {
+        self.positions.push(p);
+        (self.positions.len() - 1) as u32
+    }
+
+    /// A quad with corners a = (row, col), b = (row, col + 1), c = (row + 1, col + 1),
+    /// d = (row + 1, col), where "row + 1" is up and "col + 1" is right seen from outside, so the
+    /// outward normal is up × right. `flip` picks the other diagonal.
+    fn quad(&mut self, a: u32, b: u32, c: u32, d: u32, flip: bool) {
+        if flip {
+            self.triangles.push([a, c, b]);
+            self.triangles.push([a, d, c]);
+        } else {
+            self.triangles.push([a, d, b]);
+            self.triangles.push([b, d, c]);
+        }
+    }
+
+    /// Stitches a closed ring to the closed ring above it, walking both by arc-length fraction
+    /// (vertex k of an n-ring sits at k/n). Both rings run in the same sense (right, seen from
+    /// outside).
+    fn loft(&mut self, lower: &[u32], upper: &[u32], upper_first: bool) {
+        let (nl, nu) = (lower.len(), upper.len());
+        if nl == 0 || nu == 0 {
+            return;
+        }
+        let (mut k, mut j) = (0usize, 0usize);
+        while k < nl || j < nu {
+            let advance_lower = if k == nl {
+                false
+            } else if j == nu {
+                true
+            } else {
+                match ((k + 1) * nu).cmp(&((j + 1) * nl)) {
+                    std::cmp::Ordering::Less => true,
+                    std::cmp::Ordering::Greater => false,
+                    std::cmp::Ordering::Equal => !upper_first,
+                }
+            };
+            if advance_lower {
+                self.triangles
+                    .push([lower[k % nl], upper[j % nu], lower[(k + 1) % nl]]);
+                k += 1;
+            } else {
+                self.triangles
+                    .push([lower[k % nl], upper[j % nu], upper[(j + 1) % nu]]);
+                j += 1;
+            }
+        }
+    }
+}
+
+/// The T-shirt and dress bodice: a tube of rings of `n` columns with the armhole columns left out
+/// above the armpit ring, and shoulder straps.
+struct Bodice {
+    /// Vertex of (ring, column), `None` in the armholes.
+    grid: Vec<Vec<Option<u32>>>,
+    /// Columns left out above `armpit`.
+    x_cut: f32,
+    neck_half: f32,
+}
+
+struct BodiceSpec {
+    /// Height and semi-axes of each ring, bottom to top.
+    rings: Vec<(f32, Vec2)>,
+    zc: f32,
+    n: usize,
+    /// Index of the armpit ring (the last full ring).
+    armpit: usize,
+}
+
+fn build_bodice(
+    b: &mut Builder,
+    rest: &Rest,
+    spec: &BodiceSpec,
+    params: &GarmentParams,
+) -> Result<Bodice, GarmentError> {
+    let n = spec.n;
+    let top = spec.rings.len() - 1;
+    let shoulder = rest.joint_position("rShldr")?.lerp(rest.joint_position("lShldr")?, 0.5);
+    let arm = rest.capsules_of(&["right_upper_arm"])?;
+    let arm_radius = arm.first().map_or(6.0, |c| c.radius_a);
+    let neck = rest.capsules_of(&["neck"])?;
+    let neck_radius = neck.first().map_or(6.0, |c| c.radius_a);
+    let (top_y, top_semi) = spec.rings[top];
+    let _ = top_y;
+    // The armhole must let the upper arm through with a centimetre to spare front and back.
+    let reach = (shoulder.z - arm_radius - 1.0 - spec.zc)
+        .abs()
+        .max((shoulder.z + arm_radius + 1.0 - spec.zc).abs());
+    let x_cut = top_semi.x * (1.0 - (reach / top_semi.y).min(0.9).powi(2)).sqrt();
+    let neck_half = (neck_radius + params.ease_cm).min(x_cut - 1.5 * params.edge_cm);
+
+    let rings: Vec<Vec<Vec3>> = spec
+        .rings
+        .iter()
+        .map(|&(y, semi)| ellipse_ring(y, spec.zc, semi, n))
+        .collect();
+    let top_ring = &rings[top];
+    let in_armhole = |k: usize| top_ring[k].x.abs() > x_cut;
+    let mut grid: Vec<Vec<Option<u32>>> = Vec::with_capacity(rings.len());
+    for (i, ring) in rings.iter().enumerate() {
+        grid.push(
+            ring.iter()
+                .enumerate()
+                .map(|(k, &p)| (i <= spec.armpit || !in_armhole(k)).then(|| b.vertex(p)))
+                .collect(),
+        );
+    }
+    for i in 0..top {
+        for k in 0..n {
+            let k1 = (k + 1) % n;
+            if let (Some(a), Some(bb), Some(c), Some(d)) =
+                (grid[i][k], grid[i][k1], grid[i + 1][k1], grid[i + 1][k])
+            {
+                b.quad(a, bb, c, d, (i + k) % 2 == 1);
+            }
+        }
+    }
+
+    // Straps: front column k (0 < k < n/2) to its mirror n − k over the shoulder.
+    let strap_columns: Vec<usize> = (1..n / 2)
+        .filter(|&k| {
+            grid[top][k].is_some()
+                && grid[top][n - k].is_some()
+                && top_ring[k].x.abs() >= neck_half
+        })
+        .collect();
+    if strap_columns.is_empty() {
+        return Err(GarmentError::Invalid {
+            name: "bodice".into(),
+            message: format!(
+                "no room for shoulder straps between the neck ({neck_half:.1} cm) and the armholes ({x_cut:.1} cm); use a shorter edge or less ease"
+            ),
+        });
+    }
+    let clear = 0.5 * params.ease_cm + 0.5;
+    let paths: Vec<Vec<Vec3>> = strap_columns
+        .iter()
+        .map(|&k| {
+            let front = top_ring[k];
+            let back = top_ring[n - k];
+            strap_path(rest, front, back, clear)
+        })
+        .collect();
+    let longest = paths
+        .iter()
+        .map(|p| polyline_length(p))
+        .fold(0.0f32, f32::max);
+    let segments = ((longest / params.edge_cm).round() as usize).max(2);
+    let mut strap_ids: Vec<Vec<u32>> = Vec::with_capacity(strap_columns.len());
+    for (s, &k) in strap_columns.iter().enumerate() {
+        let points = resample(&paths[s], segments);
+        let mut ids = Vec::with_capacity(segments + 1);
+        for (j, p) in points.iter().enumerate() {
+            ids.push(if j == 0 {
+                grid[top][k].unwrap_or(0)
+            } else if j == segments {
+                grid[top][n - k].unwrap_or(0)
+            } else {
+                b.vertex(*p)
+            });
+        }
+        strap_ids.push(ids);
+    }
+    for s in 0..strap_columns.len().saturating_sub(1) {
+        if strap_columns[s + 1] != strap_columns[s] + 1 {
+            continue;
+        }
+        for j in 0..segments {
+            let (a, bb) = (strap_ids[s][j], strap_ids[s + 1][j]);
+            let (c, d) = (strap_ids[s + 1][j + 1], strap_ids[s][j + 1]);
+            b.quad(a, bb, c, d, (j + strap_columns[s]) % 2 == 1);
+        }
+    }
+    Ok(Bodice {
+        grid,
+        x_cut,
+        neck_half,
+    })
+}
+
+/// Half-ellipse from `front` up over the shoulder to `back` (same x), as low as keeps `clear`
+/// centimetres from every capsule but the head's.
+fn strap_path(rest: &Rest, front: Vec3, back: Vec3, clear: f32) -> Vec<Vec3> {
+    const SAMPLES: usize = 64;
+    let path = |height: f32| -> Vec<Vec3> {
+        (0..=SAMPLES)
+            .map(|k| {
+                let phi = PI * k as f32 / SAMPLES as f32;
+                let t = 0.5 - 0.5 * phi.cos();
+                let base = front.lerp(back, t);
+                base + Vec3::Y * (height * phi.sin())
+            })
+            .collect()
+    };
+    // Never ask for more room than the panel's own top vertices have (the outermost columns sit
+    // next to the armhole, closer to the arm than `clear`).
+    let need = clear
+        .min(rest.clearance(front, &["head"]))
+        .min(rest.clearance(back, &["head"]))
+        - 0.01;
+    let ok = |height: f32| {
+        path(height)
+            .iter()
+            .all(|&p| rest.clearance(p, &["head"]) >= need)
+    };
+    let (mut lo, mut hi) = (0.0f32, 40.0f32);
+    if ok(lo) {
+        return path(lo);
+    }
+    for _ in 0..24 {
+        let mid = 0.5 * (lo + hi);
+        if ok(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    path(hi)
+}
+
+fn polyline_length(points: &[Vec3]) -> f32 {
+    points.windows(2).map(|w| w[0].distance(w[1])).sum()
+}
+
+/// `segments + 1` points evenly spaced by arc length along a polyline (ends included).
+fn resample(points: &[Vec3], segments: usize) -> Vec<Vec3> {
+    let total = polyline_length(points);
+    let mut out = Vec::with_capacity(segments + 1);
+    let mut walked = 0.0f32;
+    let mut i = 0usize;
+    for s in 0..=segments {
+        let target = total * s as f32 / segments as f32;
+        while i + 2 < points.len() && walked + points[i].distance(points[i + 1]) < target {
+            walked += points[i].distance(points[i + 1]);
+            i += 1;
+        }
+        let seg = points[i].distance(points[(i + 1).min(points.len() - 1)]);
+        let t = if seg > 0.0 {
+            ((target - walked) / seg).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        out.push(points[i].lerp(points[(i + 1).min(points.len() - 1)], t));
+    }
+    out
+}
+
+/// A short sleeve welded to an armhole loop (the loop runs as the bodice's triangles run it).
+#[allow(clippy::too_many_arguments)]
+fn build_sleeve(
+    b: &mut Builder,
+    armhole: &[u32],
+    shoulder: Vec3,
+    elbow: Vec3,
+    arm: &Capsule,
+    params: &GarmentParams,
+) {
+    let d = (elbow - shoulder).normalize_or(Vec3::X);
+    let upper_arm = elbow.distance(shoulder);
+    let loop_points: Vec<Vec3> = armhole.iter().map(|&v| b.positions[v as usize]).collect();
+    let axial: Vec<f32> = loop_points.iter().map(|p| (*p - shoulder).dot(d)).collect();
+    let radial: Vec<Vec3> = loop_points
+        .iter()
+        .zip(&axial)
+        .map(|(p, a)| *p - shoulder - d * *a)
+        .collect();
+    let count = radial.len().max(1) as f32;
+    let centre = radial.iter().copied().sum::<Vec3>() / count;
+    let mean_radius = radial.iter().map(|r| r.distance(centre)).sum::<f32>() / count;
+    let start = axial.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let end = (0.55 * upper_arm).max(start + 2.0 * params.edge_cm);
+    let rings = (((end - start) / params.edge_cm).round() as usize).max(2);
+    let arm_at = |a: f32| {
+        let t = (a / upper_arm.max(1e-3)).clamp(0.0, 1.0);
+        arm.radius_a + (arm.radius_b - arm.radius_a) * t
+    };
+    let end_radius = arm_at(end) + params.ease_cm;
+    let mut previous: Vec<u32> = armhole.to_vec();
+    for j in 1..=rings {
+        let f = (j as f32 / 2.0).min(1.0);
+        let along = start + (end - start) * j as f32 / rings as f32;
+        let radius = mean_radius + (end_radius - mean_radius) * j as f32 / rings as f32;
+        let ring: Vec<u32> = (0..armhole.len())
+            .map(|m| {
+                let dir = (radial[m] - centre).normalize_or(d.any_orthonormal_vector());
+                let a = axial[m] + (along - axial[m]) * f;
+                let r = radial[m].lerp(dir * radius, f);
+                b.vertex(shoulder + d * a + r)
+            })
+            .collect();
+        let l = armhole.len();
+        for m in 0..l {
+            let m1 = (m + 1) % l;
+            let (a, bb, c, dd) = (previous[m], previous[m1], ring[m1], ring[m]);
+            // The bodice runs a → bb; the sleeve must run bb → a.
+            if (j + m) % 2 == 0 {
+                b.triangles.push([a, c, bb]);
+                b.triangles.push([a, dd, c]);
+            } else {
+                b.triangles.push([a, dd, bb]);
+                b.triangles.push([bb, dd, c]);
+            }
+        }
+        previous = ring;
+    }
+}
+
+/// Torso z centre: the middle of the discs' front-to-back extent over the given heights.
+fn section_centre(capsules: &[Capsule], heights: &[f32]) -> f32 {
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for &y in heights {
+        for (c, r) in section(capsules, y) {
+            lo = lo.min(c.y - r);
+            hi = hi.max(c.y + r);
+        }
+    }
+    if lo.is_finite() && hi.is_finite() {
+        0.5 * (lo + hi)
+    } else {
+        0.0
+    }
+}
+
+fn even_ceil(x: f32, minimum: usize) -> usize {
+    let n = (x.round() as usize).max(minimum);
+    n + n % 2
+}
+
+/// Heights from `bottom` to `top` in about `edge` steps (both ends included).
+fn heights(bottom: f32, top: f32, edge: f32) -> Vec<f32> {
+    let segments = (((top - bottom) / edge).round() as usize).max(2);
+    (0..=segments)
+        .map(|i| bottom + (top - bottom) * i as f32 / segments as f32)
+        .collect()
+}
+
+const TORSO: [&str; 6] = [
+    "pelvis",
+    "abdomen",
+    "chest",
+    "neck",
+    "right_thigh",
+    "left_thigh",
+];
+const LEGS: [&str; 7] = [
+    "pelvis",
+    "abdomen",
+    "right_thigh",
+    "left_thigh",
+    "right_shin",
+    "left_shin",
+    "chest",
+];
+
+/// Ellipse per height (fitted to the discs, plus ease).
+fn fitted(capsules: &[Capsule], ys: &[f32], zc: f32, ease: f32) -> Vec<(f32, Vec2)> {
+    let mut out: Vec<(f32, Vec2)> = Vec::with_capacity(ys.len());
+    for &y in ys {
+        let semi = fit_ellipse(&section(capsules, y), zc)
+            .or_else(|| out.last().map(|l| l.1 - Vec2::splat(ease)))
+            .unwrap_or(Vec2::new(10.0, 8.0));
+        out.push((y, semi + Vec2::splat(ease)));
+    }
+    out
+}
+
+fn bodice_spec(
+    rest: &Rest,
+    params: &GarmentParams,
+    bottom: f32,
+    hang_straight: bool,
+) -> Result<BodiceSpec, GarmentError> {
+    let shoulder = rest.joint_position("rShldr")?.lerp(rest.joint_position("lShldr")?, 0.5);
+    let arm_radius = rest
+        .capsules_of(&["right_upper_arm"])?
+        .first()
+        .map_or(6.0, |c| c.radius_a);
+    let torso = rest.capsules_of(&TORSO)?;
+    let top = shoulder.y;
+    let ys = heights(bottom, top, params.edge_cm);
+    let zc = section_centre(&torso, &ys);
+    let mut rings = fitted(&torso, &ys, zc, params.ease_cm);
+    if hang_straight {
+        for i in (0..rings.len() - 1).rev() {
+            rings[i].1 = rings[i].1.max(rings[i + 1].1);
+        }
+    }
+    let armpit_y = shoulder.y - arm_radius - params.ease_cm;
+    let armpit = ys
+        .iter()
+        .rposition(|&y| y <= armpit_y)
+        .unwrap_or(0)
+        .min(ys.len().saturating_sub(3));
+    let widest = rings
+        .iter()
+        .map(|r| ellipse_perimeter(r.1))
+        .fold(0.0f32, f32::max);
+    Ok(BodiceSpec {
+        rings,
+        zc,
+        n: even_ceil(widest / params.edge_cm, 16),
+        armpit,
+    })
+}
+
+/// The boundary loop whose centroid best matches `pick` (smallest score).
+fn find_loop(b: &Builder, loops: &[Vec<u32>], score: impl Fn(Vec3) -> f32) -> Option<Vec<u32>> {
+    loops
+        .iter()
+        .map(|l| {
+            let c = l.iter().map(|&v| b.positions[v as usize]).sum::<Vec3>() / l.len().max(1) as f32;
+            (score(c), l)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, l)| l.clone())
+}
+
+fn neckline_anchors(
+    b: &Builder,
+    rest: &Rest,
+    bodice: &Bodice,
+    top_y: f32,
+    with_neighbours: bool,
+) -> Result<Vec<Anchor>, GarmentError> {
+    let loops = boundary_loops(&b.triangles);
+    let neck_half = bodice.neck_half;
+    let neck = find_loop(b, &loops, |c| c.x.abs() + (c.y - top_y).min(0.0).abs() * 2.0)
+        .filter(|l| {
+            l.iter()
+                .all(|&v| b.positions[v as usize].x.abs() <= neck_half + bodice.x_cut)
+        })
+        .ok_or_else(|| GarmentError::Invalid {
+            name: "neckline".into(),
+            message: "no neck hole found".into(),
+        })?;
+    let chest = rest.joint("chest")?;
+    let mut vertices = neck.clone();
+    if with_neighbours {
+        let adjacency = Adjacency::new(b.positions.len(), &unique_edges(&b.triangles));
+        for &v in &neck {
+            vertices.extend_from_slice(adjacency.neighbours(v as usize));
+        }
+    }
+    vertices.sort_unstable();
+    vertices.dedup();
+    Ok(vertices
+        .into_iter()
+        .map(|v| Anchor {
+            vertex: v,
+            bone: chest,
+            local: rest.bone_local(chest, b.positions[v as usize]),
+        })
+        .collect())
+}
+
+/// Pushes every vertex at least `clear` cm out of every capsule, then recomputes anchor locals.
+fn push_out(rest: &Rest, positions: &mut [Vec3], clear: f32) {
+    for p in positions.iter_mut() {
+        for _ in 0..6 {
+            let mut moved = false;
+            for c in &rest.prepared {
+                let (d, n) = c.query((*p).into());
+                if d < clear {
+                    *p += Vec3::from(n) * (clear - d);
+                    moved = true;
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+    }
+}
+
+fn finish(rest: &Rest, name: &str, mut b: Builder, mut anchors: Vec<Anchor>, ease: f32) -> GarmentMesh {
+    push_out(rest, &mut b.positions, 0.5 * ease);
+    for a in &mut anchors {
+        a.local = rest.bone_local(a.bone, b.positions[a.vertex as usize]);
+    }
+    GarmentMesh {
+        name: name.to_owned(),
+        positions: b.positions,
+        triangles: b.triangles,
+        anchors,
+    }
+}
+
+fn tshirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentError> {
+    let hip = rest.joint_position("hip")?;
+    let abdomen = rest.joint_position("abdomen")?;
+    let hem = hip.y - 0.25 * (abdomen.y - hip.y);
+    let spec = bodice_spec(rest, params, hem, true)?;
+    let mut b = Builder::default();
+    let bodice = build_bodice(&mut b, rest, &spec, params)?;
+    let top_y = spec.rings[spec.rings.len() - 1].0;
+    let anchors = neckline_anchors(&b, rest, &bodice, top_y, true)?;
+    // Sleeves on the two armhole loops.
+    let loops = boundary_loops(&b.triangles);
+    for (side, shoulder_name, elbow_name, part) in [
+        (-1.0f32, "rShldr", "rForeArm", "right_upper_arm"),
+        (1.0, "lShldr", "lForeArm", "left_upper_arm"),
+    ] {
+        let shoulder = rest.joint_position(shoulder_name)?;
+        let elbow = rest.joint_position(elbow_name)?;
+        let arm = rest
+            .capsules_of(&[part])?
+            .first()
+            .copied()
+            .ok_or(GarmentError::MissingPart(part))?;
+        let armhole = find_loop(&b, &loops, |c| -(c.x * side) + (c.y - shoulder.y).abs())
+            .filter(|l| {
+                l.iter()
+                    .all(|&v| b.positions[v as usize].x * side > 0.0)
+            })
+            .ok_or_else(|| GarmentError::Invalid {
+                name: "tshirt".into(),
+                message: format!("no armhole found on the {shoulder_name} side"),
+            })?;
+        build_sleeve(&mut b, &armhole, shoulder, elbow, &arm, params);
+    }
+    let _ = bodice.grid.len();
+    Ok(finish(rest, "tshirt", b, anchors, params.ease_cm))
+}
+
+/// Skirt rings from `waist_y` down to the hem: (height, semi-axes), top first.
+fn skirt_rings(
+    rest: &Rest,
+    params: &GarmentParams,
+    waist_y: f32,
+    waist_semi: Option<Vec2>,
+    zc: f32,
+) -> Result<Vec<(f32, Vec2)>, GarmentError> {
+    let knee = rest.joint_position("rShin")?.lerp(rest.joint_position("lShin")?, 0.5);
+    let hem = knee.y + 3.0;
+    let legs = rest.capsules_of(&LEGS)?;
+    let flare = 12f32.to_radians().tan();
+    let step = params.edge_cm * 12f32.to_radians().cos();
+    let ys: Vec<f32> = heights(hem, waist_y, step).into_iter().rev().collect();
+    let mut out: Vec<(f32, Vec2)> = Vec::with_capacity(ys.len());
+    for (i, &y) in ys.iter().enumerate() {
+        let body = fit_ellipse(&section(&legs, y), zc).unwrap_or(Vec2::new(10.0, 8.0));
+        let semi = if i == 0 {
+            waist_semi.unwrap_or(body + Vec2::splat(0.4 * params.ease_cm + 0.5))
+        } else {
+            let above = out[i - 1].1;
+            let flared = out[0].1 + Vec2::splat(flare * (waist_y - y));
+            above.max(flared).max(body + Vec2::splat(params.ease_cm))
+        };
+        out.push((y, semi));
+    }
+    Ok(out)
+}
+
+/// Rings of a flared skirt hung from `waist` (the first ring's vertices), top down; returns the
+/// bottom ring.
+fn build_skirt_rings(b: &mut Builder, waist: Vec<u32>, rings: &[(f32, Vec2)], zc: f32, edge: f32) {
+    let mut upper = waist;
+    for (i, &(y, semi)) in rings.iter().enumerate().skip(1) {
+        let n = ((ellipse_perimeter(semi) / edge).round() as usize).max(upper.len());
+        let lower: Vec<u32> = ellipse_ring(y, zc, semi, n)
+            .into_iter()
+            .map(|p| b.vertex(p))
+            .collect();
+        b.loft(&lower, &upper, i % 2 == 0);
+        upper = lower;
+    }
+}
+
+fn skirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentError> {
+    let hip = rest.joint_position("hip")?;
+    let abdomen = rest.joint_position("abdomen")?;
+    let waist_y = hip.y + 0.7 * (abdomen.y - hip.y);
+    let legs = rest.capsules_of(&LEGS)?;
+    let zc = section_centre(&legs, &[waist_y, hip.y]);
+    let rings = skirt_rings(rest, params, waist_y, None, zc)?;
+    let mut b = Builder::default();
+    let (y0, semi0) = rings[0];
+    let n0 = even_ceil(ellipse_perimeter(semi0) / params.edge_cm, 16);
+    let waist: Vec<u32> = ellipse_ring(y0, zc, semi0, n0)
+        .into_iter()
+        .map(|p| b.vertex(p))
+        .collect();
+    build_skirt_rings(&mut b, waist.clone(), &rings, zc, params.edge_cm);
+    // The waistband: the top ring and the one below it, on the hip bone.
+    let hip_bone = rest.joint("hip")?;
+    let adjacency = Adjacency::new(b.positions.len(), &unique_edges(&b.triangles));
+    let mut band = waist.clone();
+    for &v in &waist {
+        band.extend_from_slice(adjacency.neighbours(v as usize));
+    }
+    band.sort_unstable();
+    band.dedup();
+    let anchors = band
+        .into_iter()
+        .map(|v| Anchor {
+            vertex: v,
+            bone: hip_bone,
+            local: Vec3::ZERO,
+        })
+        .collect();
+    Ok(finish(rest, "skirt", b, anchors, params.ease_cm))
+}
+
+fn dress(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentError> {
+    let abdomen = rest.joint_position("abdomen")?;
+    let waist_y = abdomen.y;
+    let spec = bodice_spec(rest, params, waist_y, false)?;
+    let mut b = Builder::default();
+    let bodice = build_bodice(&mut b, rest, &spec, params)?;
+    let top_y = spec.rings[spec.rings.len() - 1].0;
+    let mut anchors = neckline_anchors(&b, rest, &bodice, top_y, false)?;
+    let waist: Vec<u32> = bodice.grid[0].iter().map(|v| v.unwrap_or(0)).collect();
+    let rings = skirt_rings(rest, params, waist_y, Some(spec.rings[0].1), spec.zc)?;
+    build_skirt_rings(&mut b, waist.clone(), &rings, spec.zc, params.edge_cm);
+    let hip_bone = rest.joint("hip")?;
+    anchors.extend(waist.iter().map(|&v| Anchor {
+        vertex: v,
+        bone: hip_bone,
+        local: Vec3::ZERO,
+    }));
+    Ok(finish(rest, "dress", b, anchors, params.ease_cm))
+}
+
+/// Bone rest transforms for binding arbitrary meshes (the OBJ loader's anchors).
+pub(crate) fn rest_pose(rig: &BodyRig) -> BodyPose {
+    let mut pose = BodyPose::default();
+    rig.pose(&rig.rest_frame(), &mut pose);
+    pose
+}
+
+/// The local position of `p` in `bone`'s rest frame.
+pub(crate) fn to_bone_local(bones: &[Affine3A], bone: usize, p: Vec3) -> Vec3 {
+    bones
+        .get(bone)
+        .map_or(p, |b| b.inverse().transform_point3(p))
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::cloth::proxies::DEFAULT_MARGIN_CM;
+    use crate::cloth::topology::consistently_wound;
+    use std::path::Path;
+
+    pub fn chidi() -> BodyRig {
+        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        let motion = crate::bvh::Motion::load(&clip).expect("clip");
+        let subject = crate::body::Subject::find("chidi").expect("chidi");
+        BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig")
+    }
+
+    #[test]
+    fn ellipse_ring_is_even_and_symmetric() {
+        let ring = ellipse_ring(5.0, 1.0, Vec2::new(15.0, 10.0), 40);
+        assert_eq!(ring.len(), 40);
+        assert!((ring[0] - Vec3::new(15.0, 5.0, 1.0)).length() < 1e-4);
+        // Mirror columns k and n − k have the same x, opposite z about the centre.
+        for k in 1..20 {
+            let (f, b) = (ring[k], ring[40 - k]);
+            assert!((f.x - b.x).abs() < 2e-3 && (f.z - 1.0 + b.z - 1.0).abs() < 2e-3, "{k}");
+        }
+        let perimeter = ellipse_perimeter(Vec2::new(15.0, 10.0));
+        for k in 0..40 {
+            let step = ring[k].distance(ring[(k + 1) % 40]);
+            assert!((step - perimeter / 40.0).abs() < 0.02, "{k} {step}");
+        }
+    }
+
+    #[test]
+    fn fitted_ellipse_contains_the_discs() {
+        let discs = vec![(Vec2::new(-5.0, 0.0), 11.0), (Vec2::new(5.0, 0.0), 11.0)];
+        let semi = fit_ellipse(&discs, 0.0).expect("fit");
+        for (c, r) in &discs {
+            for k in 0..360 {
+                let (s, co) = (k as f32).to_radians().sin_cos();
+                let p = *c + Vec2::new(co, s) * *r;
+                let inside = (p.x / semi.x).powi(2) + (p.y / semi.y).powi(2);
+                assert!(inside <= 1.0 + 1e-3, "{p} {semi}");
+            }
+        }
+    }
+
+    fn check_garment(mesh: &GarmentMesh, rig: &BodyRig) {
+        mesh.validate().expect("valid");
+        assert!(consistently_wound(&mesh.triangles), "{}", mesh.name);
+        // One connected piece.
+        let adjacency = Adjacency::new(mesh.positions.len(), &unique_edges(&mesh.triangles));
+        let mut seen = vec![false; mesh.positions.len()];
+        let mut stack = vec![0u32];
+        seen[0] = true;
+        while let Some(v) = stack.pop() {
+            for &w in adjacency.neighbours(v as usize) {
+                if !seen[w as usize] {
+                    seen[w as usize] = true;
+                    stack.push(w);
+                }
+            }
+        }
+        assert!(seen.iter().all(|&s| s), "{} is in pieces", mesh.name);
+        // Outward: most triangle normals point away from the nearest capsule axis.
+        let rest = Rest::new(rig);
+        let mut outward = 0;
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            let centroid = (a + b + c) / 3.0;
+            let nearest = rest
+                .pose
+                .capsules
+                .iter()
+                .map(|cap| cap.closest(centroid))
+                .min_by(|x, y| x.distance.total_cmp(&y.distance))
+                .expect("capsules");
+            if n.dot(nearest.normal) > 0.0 {
+                outward += 1;
+            }
+        }
+        assert!(
+            outward * 100 > mesh.triangles.len() * 95,
+            "{}: {outward} of {} outward",
+            mesh.name,
+            mesh.triangles.len()
+        );
+        // Clear of the body at rest.
+        for p in &mesh.positions {
+            assert!(rest.clearance(*p, &[]) > 0.5, "{} {p}", mesh.name);
+        }
+        // Anchors map back to their rest positions.
+        for a in &mesh.anchors {
+            let world = rest.pose.bones[a.bone].transform_point3(a.local);
+            assert!(world.distance(mesh.positions[a.vertex as usize]) < 1e-3);
+        }
+        assert!(!mesh.anchors.is_empty());
+    }
+
+    #[test]
+    fn garments_fit_the_body() {
+        let rig = chidi();
+        for kind in GarmentKind::ALL {
+            let mesh = GarmentMesh::generate(kind, &rig, &GarmentParams::live()).expect("garment");
+            check_garment(&mesh, &rig);
+            let loops = boundary_loops(&mesh.triangles);
+            // T-shirt: hem, neck, two sleeve ends; skirt: waist and hem; dress: neck, two armholes, hem.
+            let expected = match kind {
+                GarmentKind::TShirt => 4,
+                GarmentKind::Skirt => 2,
+                GarmentKind::Dress => 4,
+            };
+            assert_eq!(loops.len(), expected, "{}", mesh.name);
+            println!(
+                "{}: {} vertices, {} triangles, {} anchors",
+                mesh.name,
+                mesh.positions.len(),
+                mesh.triangles.len(),
+                mesh.anchors.len()
+            );
+        }
+    }
+
+    #[test]
+    fn quality_mode_has_about_four_times_the_vertices() {
+        let rig = chidi();
+        let live = GarmentMesh::generate(GarmentKind::Skirt, &rig, &GarmentParams::live()).expect("live");
+        let fine =
+            GarmentMesh::generate(GarmentKind::Skirt, &rig, &GarmentParams::quality()).expect("fine");
+        let ratio = fine.positions.len() as f32 / live.positions.len() as f32;
+        assert!((3.4..4.6).contains(&ratio), "{ratio}");
+        let (mesh, edge) =
+            GarmentMesh::with_vertex_count(GarmentKind::TShirt, &rig, 3000, 2.5).expect("sized");
+        assert!(mesh.positions.len().abs_diff(3000) < 150, "{} at {edge}", mesh.positions.len());
+        check_garment(&mesh, &rig);
+    }
+
+    #[test]
+    fn bad_parameters_are_rejected() {
+        let rig = chidi();
+        let bad = GarmentParams {
+            edge_cm: 0.0,
+            ease_cm: 2.0,
+        };
+        assert_eq!(
+            GarmentMesh::generate(GarmentKind::Dress, &rig, &bad),
+            Err(GarmentError::BadEdge(0.0))
+        );
+        assert_eq!("Dress".parse::<GarmentKind>(), Ok(GarmentKind::Dress));
+        assert!("cape".parse::<GarmentKind>().is_err());
+    }
+}
+#[cfg(test)]
+mod scratch2 {
+    use super::*;
+    #[test]
+    fn counts() {
+        let rig = super::tests::chidi();
+        for e in [2.2f32, 2.0, 1.9, 1.87, 1.8, 1.6, 1.4, 1.2, 1.0] {
+            for kind in GarmentKind::ALL {
+                let r = GarmentMesh::generate(kind, &rig, &GarmentParams { edge_cm: e, ease_cm: 2.5 });
+                println!("{e} {:?} {:?}", kind, r.map(|m| m.positions.len()));
+            }
+        }
+    }
+}
+#[cfg(test)]
+pub mod viz {
+    use super::*;
+    /// Orthographic views (front, side, top-ish) of triangles with flat shading, plus capsules.
+    pub fn render(path: &str, positions: &[Vec3], triangles: &[[u32; 3]], capsules: &[Capsule]) {
+        let (w, h) = (900u32, 600u32);
+        let mut img = image::RgbImage::new(w, h);
+        let mut depth = vec![f32::INFINITY; (w * h) as usize];
+        let views: [(Vec3, Vec3, Vec3, f32); 3] = [
+            (Vec3::X, Vec3::Y, Vec3::Z, 150.0),   // front: looking from +Z
+            (Vec3::Z, Vec3::Y, -Vec3::X, 450.0),   // side from -X... 
+            (-Vec3::X, Vec3::Y, -Vec3::Z, 750.0),  // back
+        ];
+        let centre = positions.iter().copied().sum::<Vec3>() / positions.len().max(1) as f32;
+        let scale = 2.6f32;
+        let mut draw = |tri: [Vec3; 3], colour: [f32; 3], depth: &mut Vec<f32>, img: &mut image::RgbImage| {
+            for (vi, (right, up, toward, cx)) in views.iter().enumerate() {
+                let _ = vi;
+                let proj = |p: Vec3| {
+                    let q = p - centre;
+                    (cx + q.dot(*right) * scale, 300.0 - q.dot(*up) * scale, -q.dot(*toward))
+                };
+                let [a, b, c] = tri.map(proj);
+                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+                let facing = n.dot(*toward);
+                let light = (0.35 + 0.65 * facing.abs()).min(1.0);
+                let col = if facing >= 0.0 { colour } else { [colour[0] * 0.5, colour[1] * 0.5, colour[2] * 0.9] };
+                let minx = a.0.min(b.0).min(c.0).floor().max(0.0) as i32;
+                let maxx = a.0.max(b.0).max(c.0).ceil().min(w as f32 - 1.0) as i32;
+                let miny = a.1.min(b.1).min(c.1).floor().max(0.0) as i32;
+                let maxy = a.1.max(b.1).max(c.1).ceil().min(h as f32 - 1.0) as i32;
+                let area = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+                if area.abs() < 1e-6 { continue; }
+                for y in miny..=maxy {
+                    for x in minx..=maxx {
+                        let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
+                        let w0 = ((b.0 - px) * (c.1 - py) - (b.1 - py) * (c.0 - px)) / area;
+                        let w1 = ((c.0 - px) * (a.1 - py) - (c.1 - py) * (a.0 - px)) / area;
+                        let w2 = 1.0 - w0 - w1;
+                        if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 { continue; }
+                        let z = w0 * a.2 + w1 * b.2 + w2 * c.2;
+                        let idx = (y as u32 * w + x as u32) as usize;
+                        if z < depth[idx] {
+                            depth[idx] = z;
+                            img.put_pixel(x as u32, y as u32, image::Rgb(col.map(|v| (v * light * 255.0) as u8)));
+                        }
+                    }
+                }
+            }
+        };
+        for c in capsules {
+            let part = crate::body::BodyPart {
+                name: "c", joint: 0, start: c.a, end: c.b,
+                radii_start: Vec2::splat(c.radius_a), radii_end: Vec2::splat(c.radius_b),
+                width_axis: (c.b - c.a).normalize_or(Vec3::Y).any_orthonormal_vector(), cap: 1.0,
+                material: crate::body::Material::Skin, surface: 0,
+            };
+            let m = part.mesh(16, 4.0);
+            for t in &m.triangles {
+                draw(t.map(|i| m.vertices[i as usize].position), [0.5, 0.45, 0.4], &mut depth, &mut img);
+            }
+        }
+        for t in triangles {
+            draw(t.map(|i| positions[i as usize]), [0.3, 0.6, 1.0], &mut depth, &mut img);
+        }
+        img.save(path).expect("save");
+    }
+
+    #[test]
+    fn draw_garments() {
+        let rig = super::tests::chidi();
+        let rest = Rest::new(&rig);
+        for kind in GarmentKind::ALL {
+            let m = GarmentMesh::generate(kind, &rig, &GarmentParams::live()).unwrap();
+            render(&format!("/tmp/cloth_{}.png", kind.name()), &m.positions, &m.triangles, &rest.pose.capsules);
+        }
+    }
+}

@@ -1,0 +1,398 @@
+//! Collision proxies: the body's elliptic parts as round tapered capsules, posed every substep.
+//!
+//! [`body_proxies`] turns each [`BodyPart`] (a capsule with an elliptic, tapering cross-section in
+//! its joint's frame) into round [`Capsule`]s the solver can test exactly: where the two semi-axes
+//! differ by more than [`STADIUM_RATIO`] at either end, capsules of the minor radius offset by
+//! ±(major − minor) along the major axis (a stadium cross-section that contains the ellipse);
+//! otherwise one capsule of the mean radius. Two capsules alone are not a stadium but the union of
+//! two discs, which dips by `r − √(r² − o²)` midway (1.3 cm on the pelvis: the cloth would sink into
+//! the belly), so a third capsule on the axis fills the middle, leaving a dip of
+//! `r − √(r² − o²/4)` (about 0.3 cm, inside the margin). Every radius is inflated by a margin (0.5 cm by
+//! default). A round capsule's end is a hemisphere of its radius, while a part's cap reaches
+//! `cap · minor semi-axis` beyond its end point, so each end is moved inward by the difference (never
+//! past the other end): the proxy reaches exactly as far along the bone as the part does. Each
+//! [`ProxyCapsule`] remembers the part and joint it came from.
+//!
+//! [`BodyRig`] holds the (subject-scaled) skeleton, the body and its proxies. Given two skeleton
+//! frames (BVH channel vectors, angles in degrees, root translation already scaled to the subject)
+//! and `t ∈ [0, 1]` it interpolates the channels — rotation channels by the shortest angular
+//! difference, position channels linearly — runs forward kinematics and fills a reusable
+//! [`BodyPose`]: the bone transforms (for kinematic anchors) and the posed capsules (for collisions).
+//! The solver asks for one pose per substep, so a fast limb moves smoothly between video frames.
+
+use std::ops::Range;
+
+use glam::{Affine3A, Vec3};
+
+use crate::body::{Body, BodyPart, MissingJoint, Subject};
+use crate::bvh::Motion;
+use crate::skeleton::Skeleton;
+
+use super::capsule::Capsule;
+
+/// Semi-axis ratio above which a part becomes two capsules (a stadium) instead of one.
+pub const STADIUM_RATIO: f32 = 1.2;
+
+/// Default inflation of every proxy radius, centimetres.
+pub const DEFAULT_MARGIN_CM: f32 = 0.5;
+
+/// Collision group of the trunk, head and legs.
+pub const GROUP_TRUNK: u8 = 0;
+/// Collision group of the arms and hands.
+pub const GROUP_ARMS: u8 = 1;
+
+/// The collision group of a body part by name: arms (upper arm, forearm, hand) or trunk (the rest).
+///
+/// The body model's upper arms overlap the torso by several centimetres when they hang (the shoulder
+/// joint lies inside the chest, and a hanging arm's axis lies inside the chest's width), so no point
+/// between arm and torso is outside both, and the side of a loose shirt lies inside the hanging arm.
+/// The solver therefore lets cloth that rests on the trunk ignore the arms, and resolves cloth that
+/// rests on an arm against the arms first and the trunk last (the trunk wins where they overlap).
+/// What the cloth leaves inside an arm there is hidden by the renderer's depth test, as the real arm
+/// hides the shirt it presses against the torso.
+pub fn collision_group(part_name: &str) -> u8 {
+    if part_name.contains("upper_arm") || part_name.contains("forearm") || part_name.contains("hand") {
+        GROUP_ARMS
+    } else {
+        GROUP_TRUNK
+    }
+}
+
+/// One round tapered capsule in its joint's local frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProxyCapsule {
+    /// Index of the body part it approximates.
+    pub part: usize,
+    /// Joint whose world transform moves it.
+    pub joint: usize,
+    /// [`collision_group`] of the part.
+    pub group: u8,
+    /// Local capsule (endpoints in the joint's frame, inflated radii).
+    pub local: Capsule,
+}
+
+impl ProxyCapsule {
+    /// The capsule in world space for the given bone transforms (as `forward_kinematics` fills them).
+    pub fn posed(&self, bones: &[Affine3A]) -> Capsule {
+        let bone = bones.get(self.joint).copied().unwrap_or(Affine3A::IDENTITY);
+        Capsule {
+            a: bone.transform_point3(self.local.a),
+            b: bone.transform_point3(self.local.b),
+            radius_a: self.local.radius_a,
+            radius_b: self.local.radius_b,
+        }
+    }
+}
+
+/// Round capsules approximating every part of `body`, radii inflated by `margin_cm`.
+pub fn body_proxies(body: &Body, margin_cm: f32) -> Vec<ProxyCapsule> {
+    let mut out = Vec::with_capacity(body.parts.len() * 2);
+    for (index, part) in body.parts.iter().enumerate() {
+        part_proxies(index, part, margin_cm, &mut out);
+    }
+    out
+}
+
+fn part_proxies(index: usize, part: &BodyPart, margin: f32, out: &mut Vec<ProxyCapsule>) {
+    let along = part.end - part.start;
+    let length = along.length();
+    let d = if length > 1e-6 { along / length } else { Vec3::Y };
+    let mut e1 = part.width_axis - d * part.width_axis.dot(d);
+    if e1.length_squared() < 1e-6 {
+        e1 = d.any_orthonormal_vector();
+    }
+    let e1 = e1.normalize();
+    let e2 = d.cross(e1);
+    let (rs, re) = (part.radii_start, part.radii_end);
+    let ratio = |r: glam::Vec2| r.max_element() / r.min_element().max(1e-6);
+    let stadium = ratio(rs) > STADIUM_RATIO || ratio(re) > STADIUM_RATIO;
+    let (cap_start, cap_end) = part.cap_lengths();
+    // Radii and sideways offsets at each end.
+    let (r_start, r_end, offset_start, offset_end, major) = if stadium {
+        let major = if rs.x + re.x >= rs.y + re.y { e1 } else { e2 };
+        (
+            rs.min_element(),
+            re.min_element(),
+            rs.max_element() - rs.min_element(),
+            re.max_element() - re.min_element(),
+            major,
+        )
+    } else {
+        ((rs.x + rs.y) * 0.5, (re.x + re.y) * 0.5, 0.0, 0.0, e1)
+    };
+    // Pull the ends in so the hemispheres reach as far as the part's caps.
+    let mut pull_start = (r_start - cap_start).max(0.0);
+    let mut pull_end = (r_end - cap_end).max(0.0);
+    if pull_start + pull_end > length {
+        let scale = length / (pull_start + pull_end);
+        pull_start *= scale;
+        pull_end *= scale;
+    }
+    let a = part.start + d * pull_start;
+    let b = part.end - d * pull_end;
+    let signs: &[f32] = if stadium {
+        &[-1.0, 0.0, 1.0]
+    } else {
+        &[0.0]
+    };
+    for &sign in signs {
+        out.push(ProxyCapsule {
+            part: index,
+            joint: part.joint,
+            group: collision_group(part.name),
+            local: Capsule {
+                a: a + major * (sign * offset_start),
+                b: b + major * (sign * offset_end),
+                radius_a: r_start + margin,
+                radius_b: r_end + margin,
+            },
+        });
+    }
+}
+
+/// A posed body: bone transforms and world capsules, refilled in place.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BodyPose {
+    /// World transform of every joint.
+    pub bones: Vec<Affine3A>,
+    /// World capsule of every proxy, in [`BodyRig::proxies`] order.
+    pub capsules: Vec<Capsule>,
+    /// The (interpolated) channel values this pose was computed from.
+    pub frame: Vec<f32>,
+}
+
+/// The skeleton, body and proxies of one subject: turns skeleton frames into [`BodyPose`]s.
+#[derive(Clone, Debug)]
+pub struct BodyRig {
+    skeleton: Skeleton,
+    body: Body,
+    proxies: Vec<ProxyCapsule>,
+    subject: Option<Subject>,
+    rotation: Vec<bool>,
+    root_channels: Range<usize>,
+}
+
+impl BodyRig {
+    /// A rig from a skeleton (already scaled to the subject) and the body built on it.
+    pub fn new(skeleton: Skeleton, body: Body, margin_cm: f32) -> BodyRig {
+        let proxies = body_proxies(&body, margin_cm);
+        let mut rotation = vec![false; skeleton.channel_count()];
+        for joint in skeleton.joints() {
+            for (k, channel) in joint.channels.iter().enumerate() {
+                if let Some(slot) = rotation.get_mut(joint.first_channel + k) {
+                    *slot = channel.is_rotation();
+                }
+            }
+        }
+        let root_channels = match skeleton.joints().first() {
+            Some(root) => root.first_channel..root.first_channel + root.channels.len(),
+            None => 0..0,
+        };
+        BodyRig {
+            skeleton,
+            body,
+            proxies,
+            subject: None,
+            rotation,
+            root_channels,
+        }
+    }
+
+    /// The rig of a built-in subject on the mocap's (unscaled) skeleton.
+    pub fn for_subject(
+        subject: &Subject,
+        mocap_skeleton: &Skeleton,
+        margin_cm: f32,
+    ) -> Result<BodyRig, MissingJoint> {
+        let skeleton = subject.scale_skeleton(mocap_skeleton);
+        let body = Body::new(subject, &skeleton)?;
+        let mut rig = BodyRig::new(skeleton, body, margin_cm);
+        rig.subject = Some(subject.clone());
+        Ok(rig)
+    }
+
+    pub fn skeleton(&self) -> &Skeleton {
+        &self.skeleton
+    }
+
+    pub fn body(&self) -> &Body {
+        &self.body
+    }
+
+    pub fn proxies(&self) -> &[ProxyCapsule] {
+        &self.proxies
+    }
+
+    pub fn subject(&self) -> Option<&Subject> {
+        self.subject.as_ref()
+    }
+
+    /// Channels of the root joint within a frame.
+    pub fn root_channels(&self) -> Range<usize> {
+        self.root_channels.clone()
+    }
+
+    /// A mocap motion on this rig's skeleton: the subject's root-translation scaling applied to every
+    /// frame (unchanged values when the rig has no subject). The motion must have the rig's layout.
+    pub fn scale_motion(&self, motion: &Motion) -> Motion {
+        motion.with_skeleton(self.skeleton.clone(), |frame| {
+            if let Some(subject) = &self.subject {
+                subject.scale_root_translation(&self.skeleton, frame);
+            }
+        })
+    }
+
+    /// The rest pose's frame: every channel zero (the shipped skeleton's T-pose at the origin).
+    pub fn rest_frame(&self) -> Vec<f32> {
+        vec![0.0; self.skeleton.channel_count()]
+    }
+
+    /// `out = a + t·(b − a)` channel by channel, rotations by the shortest angular difference
+    /// (degrees). Missing values in a short frame count as zero.
+    pub fn interpolate(&self, a: &[f32], b: &[f32], t: f32, out: &mut Vec<f32>) {
+        let n = self.skeleton.channel_count();
+        out.clear();
+        out.extend((0..n).map(|k| {
+            let va = a.get(k).copied().unwrap_or(0.0);
+            let vb = b.get(k).copied().unwrap_or(0.0);
+            let delta = if self.rotation[k] {
+                shortest_degrees(vb - va)
+            } else {
+                vb - va
+            };
+            va + delta * t
+        }));
+    }
+
+    /// Root joint position for a frame (world, centimetres).
+    pub fn root_position(&self, frame: &[f32]) -> Vec3 {
+        if self.skeleton.is_empty() {
+            return Vec3::ZERO;
+        }
+        Vec3::from(self.skeleton.local_transform(0, frame).translation)
+    }
+
+    /// Poses the body for one frame.
+    pub fn pose(&self, frame: &[f32], pose: &mut BodyPose) {
+        pose.frame.clear();
+        pose.frame.extend_from_slice(frame);
+        self.finish_pose(pose);
+    }
+
+    /// Poses the body at `t` between two frames.
+    pub fn pose_between(&self, a: &[f32], b: &[f32], t: f32, pose: &mut BodyPose) {
+        let mut frame = std::mem::take(&mut pose.frame);
+        self.interpolate(a, b, t, &mut frame);
+        pose.frame = frame;
+        self.finish_pose(pose);
+    }
+
+    fn finish_pose(&self, pose: &mut BodyPose) {
+        self.skeleton.forward_kinematics(&pose.frame, &mut pose.bones);
+        pose.capsules.clear();
+        pose.capsules
+            .extend(self.proxies.iter().map(|p| p.posed(&pose.bones)));
+    }
+}
+
+/// `delta` wrapped into [−180°, 180°).
+fn shortest_degrees(delta: f32) -> f32 {
+    (delta + 180.0).rem_euclid(360.0) - 180.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::body::Material;
+    use glam::Vec2;
+    use std::path::Path;
+
+    fn part(radii_start: Vec2, radii_end: Vec2, cap: f32) -> BodyPart {
+        BodyPart {
+            name: "test",
+            joint: 0,
+            start: Vec3::ZERO,
+            end: Vec3::new(0.0, 30.0, 0.0),
+            radii_start,
+            radii_end,
+            width_axis: Vec3::X,
+            cap,
+            material: Material::Suit,
+            surface: 0,
+        }
+    }
+
+    #[test]
+    fn round_part_is_one_capsule_of_the_mean_radius() {
+        let body = Body {
+            parts: vec![part(Vec2::new(5.0, 4.6), Vec2::new(4.0, 4.0), 1.0)],
+        };
+        let proxies = body_proxies(&body, 0.5);
+        assert_eq!(proxies.len(), 1);
+        let c = proxies[0].local;
+        assert!((c.radius_a - 5.3).abs() < 1e-6 && (c.radius_b - 4.5).abs() < 1e-6);
+        // Mean radius 4.8 against a cap of 4.6: pulled in by 0.2 cm at the start, not at the end.
+        assert!((c.a.y - 0.2).abs() < 1e-5 && (c.b.y - 30.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn flat_part_is_a_stadium_of_two_capsules() {
+        // 15 × 10 semi-axes, cap 0.7: capsules of radius 10 (+0.5) centred at −5, 0, +5 along X;
+        // ends pulled in by 10 − 7 = 3 cm.
+        let body = Body {
+            parts: vec![part(Vec2::new(15.0, 10.0), Vec2::new(15.0, 10.0), 0.7)],
+        };
+        let proxies = body_proxies(&body, 0.5);
+        assert_eq!(proxies.len(), 3);
+        let (l, m, r) = (proxies[0].local, proxies[1].local, proxies[2].local);
+        assert!((l.a - Vec3::new(-5.0, 3.0, 0.0)).length() < 1e-5, "{l:?}");
+        assert!((m.a - Vec3::new(0.0, 3.0, 0.0)).length() < 1e-5, "{m:?}");
+        assert!((r.b - Vec3::new(5.0, 27.0, 0.0)).length() < 1e-5, "{r:?}");
+        assert_eq!(l.radius_a, 10.5);
+        let union = |p: Vec3| {
+            l.signed_distance(p)
+                .min(m.signed_distance(p))
+                .min(r.signed_distance(p))
+        };
+        // The union contains the ellipse's extreme points (15, y, 0) and (0, y, 10) with the margin.
+        for p in [Vec3::new(15.0, 15.0, 0.0), Vec3::new(0.0, 15.0, 10.0)] {
+            assert!(union(p) <= -0.5 + 1e-4, "{p} {}", union(p));
+        }
+        // The worst dip, midway between two centres: the surface at x = 2.5 is at
+        // z = √(10.5² − 2.5²) = 10.198, 0.30 cm below the stadium's flat side at 10.5.
+        let top = (10.5f32 * 10.5 - 2.5 * 2.5).sqrt();
+        assert!(union(Vec3::new(2.5, 15.0, top)).abs() < 1e-4);
+        assert!((10.5 - top - 0.302).abs() < 1e-3);
+        // And the caps: the part reaches y = −7; so does the proxy (sphere bottom at 3 − 10.5 + 0.5).
+        assert!((l.a.y - l.radius_a + 0.5 - (-7.0)).abs() < 1e-4);
+    }
+
+    #[test]
+    fn rotations_interpolate_the_short_way() {
+        assert_eq!(shortest_degrees(350.0), -10.0);
+        assert_eq!(shortest_degrees(-350.0), 10.0);
+        assert_eq!(shortest_degrees(90.0), 90.0);
+        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        let motion = Motion::load(&clip).expect("clip");
+        let subject = Subject::find("chidi").expect("chidi");
+        let rig = BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig");
+        let n = rig.skeleton().channel_count();
+        let mut a = vec![0.0; n];
+        let mut b = vec![0.0; n];
+        a[0] = 10.0; // Xposition
+        b[0] = 20.0;
+        a[3] = 170.0; // Zrotation of the root
+        b[3] = -170.0;
+        let mut out = Vec::new();
+        rig.interpolate(&a, &b, 0.5, &mut out);
+        assert_eq!(out[0], 15.0);
+        assert!((out[3] - 180.0).abs() < 1e-4, "{}", out[3]);
+        let mut pose = BodyPose::default();
+        rig.pose_between(&a, &b, 0.25, &mut pose);
+        assert_eq!(pose.bones.len(), rig.skeleton().len());
+        assert_eq!(pose.capsules.len(), rig.proxies().len());
+        assert!((rig.root_position(&pose.frame).x - 12.5).abs() < 1e-5);
+        // 17 parts: pelvis, abdomen, chest, both hands and both feet are flat enough for stadiums.
+        assert_eq!(rig.proxies().len(), 17 + 2 * 7);
+    }
+}

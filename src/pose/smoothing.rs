@@ -1,0 +1,855 @@
+//! Temporal smoothing and joint limits for the pose output, applied to each BVH frame the regressor
+//! decodes, before it is written or drives the body.
+//!
+//! * [`OneEuro`]: the One-Euro filter of Casiez, Roussel and Vogel 2012 ("1€ Filter: A Simple
+//!   Speed-based Low-pass Filter for Noisy Input in Interactive Systems"): an exponential low-pass whose
+//!   cutoff rises with the signal's speed (`min_cutoff + beta · |speed|`, the speed itself low-passed at
+//!   `d_cutoff`), so slow motion is smoothed hard and fast motion is followed with little lag. The
+//!   smoothing factor comes from the time between samples, so it works at any and at varying frame rates.
+//! * Angles are filtered in unwrapped space: each new value is moved by whole turns to lie within 180°
+//!   of the previous one, so a rotation crossing ±180° (179° → −179°) is a 2° step and never swept
+//!   through 0; the output is wrapped back into (−180°, 180°].
+//! * [`JointLimits`]: per rotation channel of each non-root joint, the range of values seen in training
+//!   motions (the shortest arc holding all of them, so a range may straddle ±180°) widened by a margin.
+//!   Stored as `joint_limits.toml` (with a format version) and applied as clamps in the unwrapped space
+//!   around the range's centre. The root's rotation (the person's heading in the room) and every
+//!   position channel are never limited.
+//! * [`PoseFilter`]: both, per BVH channel of one skeleton, each switchable (`Option`) and resettable
+//!   ([`PoseFilter::reset`], e.g. on tracking loss, so the filter does not glide from a stale pose).
+//!   Each frame is clamped, smoothed, and clamped again; it hands the frame back in place.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::bvh::Motion;
+use crate::skeleton::{Channel, Skeleton};
+
+/// Version of the `joint_limits.toml` format.
+pub const JOINT_LIMITS_VERSION: u32 = 1;
+/// File name of the limits inside a suit directory.
+pub const JOINT_LIMITS_FILE: &str = "joint_limits.toml";
+/// Default widening of each learned range, each side.
+pub const DEFAULT_MARGIN_DEG: f32 = 5.0;
+/// Time step assumed when a timestamp does not advance.
+pub const FALLBACK_DT: f64 = 1.0 / 30.0;
+
+/// Wraps an angle in degrees into (−180, 180].
+pub fn wrap_degrees(a: f64) -> f64 {
+    let w = (a + 180.0).rem_euclid(360.0) - 180.0;
+    if w == -180.0 {
+        180.0
+    } else {
+        w
+    }
+}
+
+/// Parameters of one One-Euro filter (cutoffs in Hz; `beta` in 1 / (signal unit)).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OneEuroParams {
+    /// Cutoff at rest: lower = smoother, more lag when slow.
+    pub min_cutoff: f64,
+    /// How fast the cutoff rises with speed: higher = less lag when fast, more jitter.
+    pub beta: f64,
+    /// Cutoff of the speed estimate.
+    pub d_cutoff: f64,
+}
+
+/// Smoothing settings for the two kinds of BVH channel. The defaults are starting values (angles in
+/// degrees, positions in cm), not tuned on captured data.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SmoothingParams {
+    pub angles: OneEuroParams,
+    pub positions: OneEuroParams,
+}
+
+impl Default for SmoothingParams {
+    fn default() -> Self {
+        SmoothingParams {
+            angles: OneEuroParams {
+                min_cutoff: 1.0,
+                beta: 0.05,
+                d_cutoff: 1.0,
+            },
+            positions: OneEuroParams {
+                min_cutoff: 1.0,
+                beta: 0.02,
+                d_cutoff: 1.0,
+            },
+        }
+    }
+}
+
+/// Smoothing factor of an exponential low-pass with `cutoff` Hz for a step of `dt` seconds.
+fn alpha(cutoff: f64, dt: f64) -> f64 {
+    let tau = 1.0 / (std::f64::consts::TAU * cutoff.max(1e-9));
+    1.0 / (1.0 + tau / dt)
+}
+
+/// One One-Euro filter over a scalar signal, optionally an angle in degrees.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OneEuro {
+    pub params: OneEuroParams,
+    /// Filter on the circle (degrees) rather than the line.
+    pub angle: bool,
+    /// (last unwrapped raw value, last filtered value, last filtered speed), `None` before the first
+    /// sample.
+    state: Option<(f64, f64, f64)>,
+}
+
+impl OneEuro {
+    pub fn new(params: OneEuroParams, angle: bool) -> OneEuro {
+        OneEuro {
+            params,
+            angle,
+            state: None,
+        }
+    }
+
+    /// Forgets the history: the next sample passes unchanged.
+    pub fn reset(&mut self) {
+        self.state = None;
+    }
+
+    /// Filters `x` arriving `dt` seconds after the previous sample (a non-positive or non-finite
+    /// `dt` counts as [`FALLBACK_DT`]); a non-finite `x` is passed through and resets the filter.
+    pub fn filter(&mut self, x: f64, dt: f64) -> f64 {
+        if !x.is_finite() {
+            self.state = None;
+            return x;
+        }
+        let dt = if dt.is_finite() && dt > 0.0 {
+            dt
+        } else {
+            FALLBACK_DT
+        };
+        let Some((raw_prev, prev, speed_prev)) = self.state else {
+            let x = if self.angle { wrap_degrees(x) } else { x };
+            self.state = Some((x, x, 0.0));
+            return x;
+        };
+        let raw = if self.angle {
+            raw_prev + wrap_degrees(x - raw_prev)
+        } else {
+            x
+        };
+        let speed = (raw - prev) / dt;
+        let speed = speed_prev + alpha(self.params.d_cutoff, dt) * (speed - speed_prev);
+        let cutoff = self.params.min_cutoff + self.params.beta * speed.abs();
+        let mut filtered = prev + alpha(cutoff, dt) * (raw - prev);
+        let mut raw = raw;
+        if self.angle {
+            // Keep the unwrapped state near zero so it never loses precision over many turns.
+            let shift = 360.0 * (filtered / 360.0).round();
+            filtered -= shift;
+            raw -= shift;
+        }
+        self.state = Some((raw, filtered, speed));
+        if self.angle {
+            wrap_degrees(filtered)
+        } else {
+            filtered
+        }
+    }
+}
+
+/// The allowed range of one rotation channel, in degrees: `min ≤ max ≤ min + 360`, `min` in
+/// (−180, 180]; `max` may exceed 180 for a range straddling ±180°.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AngleRange {
+    pub min: f32,
+    pub max: f32,
+}
+
+impl AngleRange {
+    /// A range covering the whole circle does not limit anything.
+    pub fn is_full(&self) -> bool {
+        self.max - self.min >= 360.0
+    }
+
+    /// `angle` clamped into the range, wrapped into (−180, 180]. The angle is first moved by whole
+    /// turns to lie within 180° of the range's centre.
+    pub fn clamp(&self, angle: f32) -> f32 {
+        if self.is_full() || !angle.is_finite() {
+            return angle;
+        }
+        let (min, max) = (f64::from(self.min), f64::from(self.max));
+        let centre = 0.5 * (min + max);
+        let unwrapped = centre + wrap_degrees(f64::from(angle) - centre);
+        if unwrapped >= min && unwrapped <= max {
+            return angle;
+        }
+        wrap_degrees(unwrapped.clamp(min, max)) as f32
+    }
+
+    /// The shortest arc holding every angle, widened by `margin` each side (the whole circle if that
+    /// leaves no gap). `None` for no finite angle.
+    pub fn covering(angles: &[f32], margin: f32) -> Option<AngleRange> {
+        let mut a: Vec<f64> = angles
+            .iter()
+            .filter(|v| v.is_finite())
+            .map(|&v| wrap_degrees(f64::from(v)))
+            .collect();
+        if a.is_empty() {
+            return None;
+        }
+        a.sort_by(f64::total_cmp);
+        // The largest gap between circularly consecutive angles is what the range leaves out.
+        let (mut gap, mut start) = (a[0] + 360.0 - a[a.len() - 1], a[0]);
+        for w in a.windows(2) {
+            if w[1] - w[0] > gap {
+                gap = w[1] - w[0];
+                start = w[1];
+            }
+        }
+        let width = 360.0 - gap;
+        let margin = f64::from(margin.max(0.0));
+        if width + 2.0 * margin >= 360.0 {
+            return Some(AngleRange {
+                min: -180.0,
+                max: 180.0,
+            });
+        }
+        // Rounded outwards to 0.01° so the file holds exactly the learned range.
+        let low = start - margin;
+        let shift = wrap_degrees(low) - low;
+        let mut min = ((low + shift) * 100.0).floor() / 100.0;
+        let mut max = ((low + width + 2.0 * margin + shift) * 100.0).ceil() / 100.0;
+        if min <= -180.0 {
+            min += 360.0;
+            max += 360.0;
+        }
+        Some(AngleRange {
+            min: min as f32,
+            max: max as f32,
+        })
+    }
+}
+
+/// Learned ranges per (joint name, rotation channel).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointLimits {
+    /// Degrees each learned range was widened by on each side.
+    pub margin_deg: f32,
+    /// Frames the ranges were learned from.
+    pub frames: usize,
+    /// Sorted by joint (file order of the first motion) then channel order.
+    pub limits: Vec<ChannelLimit>,
+}
+
+/// The range of one rotation channel of one joint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChannelLimit {
+    pub joint: String,
+    pub channel: Channel,
+    pub range: AngleRange,
+}
+
+/// A joint limits file that cannot be read or written; names the file and the field.
+#[derive(Debug, thiserror::Error)]
+pub enum LimitsError {
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: cannot write: {source}")]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Format { path: PathBuf, message: String },
+    #[error("{path}: field {field}: {message}")]
+    Field {
+        path: PathBuf,
+        field: String,
+        message: String,
+    },
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LimitsFile {
+    version: u32,
+    margin_deg: f64,
+    frames: usize,
+    #[serde(default)]
+    limit: Vec<LimitEntry>,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LimitEntry {
+    joint: String,
+    channel: String,
+    min: f64,
+    max: f64,
+}
+
+/// `v` rounded to `places` decimals, as the f64 that prints shortest (files stay readable).
+fn decimal(v: f32, places: i32) -> f64 {
+    let scale = 10f64.powi(places);
+    (f64::from(v) * scale).round() / scale
+}
+
+impl JointLimits {
+    /// Learns the range of every rotation channel of every non-root joint over all frames of
+    /// `motions` (joints matched by name), widened by `margin_deg` each side.
+    pub fn learn(motions: &[Motion], margin_deg: f32) -> JointLimits {
+        let mut order: Vec<(String, Channel)> = Vec::new();
+        let mut values: HashMap<(String, Channel), Vec<f32>> = HashMap::new();
+        let mut frames = 0;
+        for motion in motions {
+            frames += motion.frame_count();
+            for joint in motion.skeleton.joints().iter().skip(1) {
+                for (k, &channel) in joint.channels.iter().enumerate() {
+                    if !channel.is_rotation() {
+                        continue;
+                    }
+                    let key = (joint.name.clone(), channel);
+                    let list = values.entry(key.clone()).or_insert_with(|| {
+                        order.push(key);
+                        Vec::new()
+                    });
+                    list.extend(motion.frames().map(|f| f[joint.first_channel + k]));
+                }
+            }
+        }
+        let limits = order
+            .into_iter()
+            .filter_map(|key| {
+                let range = AngleRange::covering(values.get(&key)?, margin_deg)?;
+                Some(ChannelLimit {
+                    joint: key.0,
+                    channel: key.1,
+                    range,
+                })
+            })
+            .collect();
+        JointLimits {
+            margin_deg,
+            frames,
+            limits,
+        }
+    }
+
+    /// The range of `joint`'s `channel`, if limited.
+    pub fn get(&self, joint: &str, channel: Channel) -> Option<AngleRange> {
+        self.limits
+            .iter()
+            .find(|l| l.joint == joint && l.channel == channel)
+            .map(|l| l.range)
+    }
+
+    /// Per channel of `skeleton`'s frames, the range that applies (root and positions: none).
+    pub fn bind(&self, skeleton: &Skeleton) -> Vec<Option<AngleRange>> {
+        let mut out = vec![None; skeleton.channel_count()];
+        for joint in skeleton.joints().iter().skip(1) {
+            for (k, &channel) in joint.channels.iter().enumerate() {
+                if channel.is_rotation() {
+                    out[joint.first_channel + k] =
+                        self.get(&joint.name, channel).filter(|r| !r.is_full());
+                }
+            }
+        }
+        out
+    }
+
+    /// The file's text.
+    pub fn to_toml(&self) -> Result<String, toml::ser::Error> {
+        let file = LimitsFile {
+            version: JOINT_LIMITS_VERSION,
+            margin_deg: decimal(self.margin_deg, 3),
+            frames: self.frames,
+            limit: self
+                .limits
+                .iter()
+                .map(|l| LimitEntry {
+                    joint: l.joint.clone(),
+                    channel: l.channel.name().to_owned(),
+                    min: decimal(l.range.min, 2),
+                    max: decimal(l.range.max, 2),
+                })
+                .collect(),
+        };
+        let body = toml::to_string(&file)?;
+        Ok(format!(
+            "# Joint limits learned from training motions: per rotation channel (degrees) the shortest\n\
+             # arc holding every training value, widened by margin_deg each side; max may exceed 180\n\
+             # for a range across ±180. Written by suitcap; see src/pose/smoothing.rs.\n{body}"
+        ))
+    }
+
+    /// Parses and validates the file's text; `path` names the source in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<JointLimits, LimitsError> {
+        let file: LimitsFile = toml::from_str(text).map_err(|e| LimitsError::Format {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        let field = |field: String, message: String| LimitsError::Field {
+            path: path.to_owned(),
+            field,
+            message,
+        };
+        if file.version != JOINT_LIMITS_VERSION {
+            return Err(field(
+                "version".into(),
+                format!(
+                    "{} is not the version this build reads ({JOINT_LIMITS_VERSION})",
+                    file.version
+                ),
+            ));
+        }
+        if !(file.margin_deg >= 0.0 && file.margin_deg <= 180.0) {
+            return Err(field(
+                "margin_deg".into(),
+                format!("{} is not in [0, 180]", file.margin_deg),
+            ));
+        }
+        let mut limits: Vec<ChannelLimit> = Vec::with_capacity(file.limit.len());
+        for (i, entry) in file.limit.into_iter().enumerate() {
+            let at = |name: &str| format!("limit[{i}].{name}");
+            let channel = Channel::from_name(&entry.channel)
+                .filter(|c| c.is_rotation())
+                .ok_or_else(|| {
+                    field(
+                        at("channel"),
+                        format!(
+                            "'{}' is not a rotation channel (Xrotation, Yrotation, Zrotation)",
+                            entry.channel
+                        ),
+                    )
+                })?;
+            if !(entry.min.is_finite() && entry.min >= -180.0 && entry.min <= 180.0) {
+                return Err(field(
+                    at("min"),
+                    format!("{} is not in [-180, 180]", entry.min),
+                ));
+            }
+            if !(entry.max.is_finite() && entry.max >= entry.min && entry.max - entry.min <= 360.0)
+            {
+                return Err(field(
+                    at("max"),
+                    format!(
+                        "{} is not in [min, min + 360] = [{}, {}]",
+                        entry.max,
+                        entry.min,
+                        entry.min + 360.0
+                    ),
+                ));
+            }
+            if limits
+                .iter()
+                .any(|l| l.joint == entry.joint && l.channel == channel)
+            {
+                return Err(field(
+                    at("joint"),
+                    format!("'{}' {} appears twice", entry.joint, channel.name()),
+                ));
+            }
+            limits.push(ChannelLimit {
+                joint: entry.joint,
+                channel,
+                range: AngleRange {
+                    min: entry.min as f32,
+                    max: entry.max as f32,
+                },
+            });
+        }
+        Ok(JointLimits {
+            margin_deg: file.margin_deg as f32,
+            frames: file.frames,
+            limits,
+        })
+    }
+
+    /// Reads a limits file.
+    pub fn load(path: &Path) -> Result<JointLimits, LimitsError> {
+        let text = std::fs::read_to_string(path).map_err(|source| LimitsError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        JointLimits::parse(&text, path)
+    }
+
+    /// Writes the file atomically.
+    pub fn save(&self, path: &Path) -> Result<(), LimitsError> {
+        let text = self.to_toml().map_err(|e| LimitsError::Format {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        crate::io::write_atomic(path, text.as_bytes()).map_err(|source| LimitsError::Write {
+            path: path.to_owned(),
+            source,
+        })
+    }
+}
+
+/// Smoothing and limits for the frames of one skeleton, one stream.
+#[derive(Clone, Debug)]
+pub struct PoseFilter {
+    /// Per channel filter; `None` when smoothing is off.
+    smoothing: Option<Vec<OneEuro>>,
+    /// Per channel range; `None` when limits are off.
+    limits: Option<Vec<Option<AngleRange>>>,
+    channels: usize,
+    last_time: Option<f64>,
+}
+
+impl PoseFilter {
+    /// A filter for frames of `skeleton`, smoothing with `smoothing` and clamping to `limits` (either
+    /// may be `None` to switch it off).
+    pub fn new(
+        skeleton: &Skeleton,
+        smoothing: Option<SmoothingParams>,
+        limits: Option<&JointLimits>,
+    ) -> PoseFilter {
+        let kinds: Vec<bool> = skeleton
+            .joints()
+            .iter()
+            .flat_map(|j| j.channels.iter().map(|c| c.is_rotation()))
+            .collect();
+        PoseFilter {
+            smoothing: smoothing.map(|p| {
+                kinds
+                    .iter()
+                    .map(|&angle| OneEuro::new(if angle { p.angles } else { p.positions }, angle))
+                    .collect()
+            }),
+            limits: limits.map(|l| l.bind(skeleton)),
+            channels: kinds.len(),
+            last_time: None,
+        }
+    }
+
+    pub fn smoothing_enabled(&self) -> bool {
+        self.smoothing.is_some()
+    }
+
+    pub fn limits_enabled(&self) -> bool {
+        self.limits.is_some()
+    }
+
+    /// Forgets the history (call on tracking loss); limits stay.
+    pub fn reset(&mut self) {
+        self.last_time = None;
+        if let Some(filters) = &mut self.smoothing {
+            filters.iter_mut().for_each(OneEuro::reset);
+        }
+    }
+
+    fn clamp(&self, frame: &mut [f32]) {
+        if let Some(limits) = &self.limits {
+            for (v, range) in frame.iter_mut().zip(limits) {
+                if let Some(r) = range {
+                    *v = r.clamp(*v);
+                }
+            }
+        }
+    }
+
+    /// Clamps, smooths and clamps `frame` (taken at `time_s` seconds on the stream's clock) in place.
+    /// A frame of the wrong length is left unchanged.
+    pub fn apply(&mut self, time_s: f64, frame: &mut [f32]) {
+        if frame.len() != self.channels {
+            return;
+        }
+        self.clamp(frame);
+        let dt = self.last_time.map_or(FALLBACK_DT, |t| time_s - t);
+        if time_s.is_finite() {
+            self.last_time = Some(time_s);
+        }
+        if let Some(filters) = &mut self.smoothing {
+            for (v, f) in frame.iter_mut().zip(filters.iter_mut()) {
+                *v = f.filter(f64::from(*v), dt) as f32;
+            }
+            self.clamp(frame);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::skeleton::tests::two_joint_arm;
+
+    const DT: f64 = 1.0 / 30.0;
+
+    fn run(filter: &mut OneEuro, xs: &[f64]) -> Vec<f64> {
+        xs.iter().map(|&x| filter.filter(x, DT)).collect()
+    }
+
+    fn angles() -> OneEuroParams {
+        SmoothingParams::default().angles
+    }
+
+    #[test]
+    fn constant_signal_passes_unchanged() {
+        for angle in [false, true] {
+            let mut f = OneEuro::new(angles(), angle);
+            for y in run(&mut f, &[42.0; 100]) {
+                assert!((y - 42.0).abs() < 1e-9, "{y}");
+            }
+        }
+    }
+
+    #[test]
+    fn step_converges_without_overshoot() {
+        let mut f = OneEuro::new(angles(), false);
+        let mut xs = vec![0.0; 10];
+        xs.extend([10.0; 60]);
+        let ys = run(&mut f, &xs);
+        assert!(
+            ys[10] > 0.0 && ys[10] < 10.0,
+            "the step is smoothed: {}",
+            ys[10]
+        );
+        assert!(ys.windows(2).all(|w| w[1] >= w[0] - 1e-12), "monotone");
+        assert!(ys.iter().all(|&y| y <= 10.0 + 1e-9), "no overshoot");
+        assert!(
+            (ys[69] - 10.0).abs() < 0.01,
+            "converged after 2 s: {}",
+            ys[69]
+        );
+    }
+
+    #[test]
+    fn noise_on_a_sine_is_reduced() {
+        // 0.25 Hz, ±30° sine at 30 frames/s with ±10° uniform noise from a fixed LCG.
+        let mut seed = 12345u64;
+        let mut noise = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 20.0
+        };
+        let truth: Vec<f64> = (0..300)
+            .map(|i| 30.0 * (std::f64::consts::TAU * 0.25 * i as f64 * DT).sin())
+            .collect();
+        let noisy: Vec<f64> = truth.iter().map(|t| t + noise()).collect();
+        let mut f = OneEuro::new(angles(), true);
+        let smooth = run(&mut f, &noisy);
+        let rms = |a: &[f64]| {
+            (a.iter()
+                .zip(&truth)
+                .skip(30)
+                .map(|(x, t)| (x - t).powi(2))
+                .sum::<f64>()
+                / (a.len() - 30) as f64)
+                .sqrt()
+        };
+        let (before, after) = (rms(&noisy), rms(&smooth));
+        assert!(after < 0.7 * before, "rms {before:.3} → {after:.3}");
+    }
+
+    #[test]
+    fn angles_cross_180_without_sweeping_through_0() {
+        let mut f = OneEuro::new(angles(), true);
+        let ys = run(
+            &mut f,
+            &[170.0, 175.0, 179.0, -179.0, -175.0, -170.0, -170.0],
+        );
+        for y in &ys {
+            assert!(y.abs() > 160.0, "{ys:?}");
+        }
+        assert!(ys[6] < 0.0, "follows to the negative side: {ys:?}");
+        assert_eq!(wrap_degrees(180.0), 180.0);
+        assert_eq!(wrap_degrees(-180.0), 180.0);
+        assert_eq!(wrap_degrees(190.0), -170.0);
+        assert_eq!(wrap_degrees(-540.0), 180.0);
+    }
+
+    #[test]
+    fn filter_follows_timestamps() {
+        // A plain 1.5 Hz low-pass (beta = 0): one 1/30 s step moves about as far as two 1/60 s steps,
+        // α = 1 / (1 + τ/dt) with τ = 1 / (2π · 1.5): 0.239 vs 1 − (1 − 0.136)² = 0.254.
+        let params = OneEuroParams {
+            min_cutoff: 1.5,
+            beta: 0.0,
+            d_cutoff: 1.0,
+        };
+        let mut a = OneEuro::new(params, false);
+        let mut b = OneEuro::new(params, false);
+        a.filter(0.0, DT);
+        b.filter(0.0, DT / 2.0);
+        let ya = a.filter(10.0, DT);
+        let yb1 = b.filter(10.0, DT / 2.0);
+        let yb = b.filter(10.0, DT / 2.0);
+        assert!(
+            (ya - 2.39).abs() < 0.01 && (yb - 2.54).abs() < 0.01,
+            "{ya} {yb}"
+        );
+        assert!(
+            (yb1 - 1.36).abs() < 0.01,
+            "half the time, less movement: {yb1}"
+        );
+        assert!(a.filter(10.0, DT) > ya);
+        a.reset();
+        assert_eq!(a.filter(-3.0, DT), -3.0);
+    }
+
+    #[test]
+    fn ranges_clamp_outside_and_keep_inside() {
+        let r = AngleRange {
+            min: -30.0,
+            max: 60.0,
+        };
+        assert_eq!(r.clamp(10.0), 10.0);
+        assert_eq!(r.clamp(90.0), 60.0);
+        assert_eq!(r.clamp(-100.0), -30.0);
+        // Outside values go to the nearer end: 160° is 100° past 60° but 170° before −30°.
+        assert_eq!(r.clamp(160.0), 60.0);
+        // −170° is 130° past 60° and 140° before −30°; −160° is nearer to −30°.
+        assert_eq!(r.clamp(-170.0), 60.0);
+        assert_eq!(r.clamp(-160.0), -30.0);
+        // A range across ±180: [170, 190] = 170° … −170°.
+        let r = AngleRange {
+            min: 170.0,
+            max: 190.0,
+        };
+        assert_eq!(r.clamp(-175.0), -175.0);
+        assert_eq!(r.clamp(175.0), 175.0);
+        assert_eq!(r.clamp(150.0), 170.0);
+        assert_eq!(r.clamp(-150.0), -170.0);
+        let full = AngleRange {
+            min: -180.0,
+            max: 180.0,
+        };
+        assert_eq!(full.clamp(123.0), 123.0);
+    }
+
+    #[test]
+    fn covering_ranges_take_the_shortest_arc() {
+        let r = AngleRange::covering(&[10.0, -20.0, 40.0], 5.0).expect("range");
+        assert_eq!((r.min, r.max), (-25.0, 45.0));
+        let r = AngleRange::covering(&[175.0, -175.0, 179.0], 5.0).expect("range");
+        assert_eq!((r.min, r.max), (170.0, 190.0));
+        let r = AngleRange::covering(&[0.0, 120.0, -120.0], 5.0).expect("range");
+        assert_eq!((r.min, r.max), (-120.0 - 5.0, 120.0 + 5.0));
+        let r = AngleRange::covering(&[0.0, 90.0, 180.0, -90.0], 50.0).expect("range");
+        assert!(r.is_full());
+        assert!(AngleRange::covering(&[], 5.0).is_none());
+    }
+
+    fn arm_motion(elbow_z: &[f32]) -> Motion {
+        let skeleton = two_joint_arm();
+        let values = elbow_z
+            .iter()
+            .flat_map(|&z| [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, z, 1.0, -1.0])
+            .collect();
+        Motion::new(skeleton, DT, values).expect("motion")
+    }
+
+    #[test]
+    fn limits_are_learned_per_channel_and_applied() {
+        let limits =
+            JointLimits::learn(&[arm_motion(&[0.0, 30.0]), arm_motion(&[-10.0, 90.0])], 5.0);
+        assert_eq!(limits.frames, 4);
+        // The root is not limited; the elbow's three rotations are.
+        assert_eq!(limits.limits.len(), 3);
+        assert_eq!(
+            limits.get("elbow", Channel::Zrotation),
+            Some(AngleRange {
+                min: -15.0,
+                max: 95.0
+            })
+        );
+        assert_eq!(
+            limits.get("elbow", Channel::Xrotation),
+            Some(AngleRange {
+                min: -4.0,
+                max: 6.0
+            })
+        );
+        let mut filter = PoseFilter::new(&two_joint_arm(), None, Some(&limits));
+        let mut frame = [200.0, 5.0, 0.0, 170.0, 0.0, 0.0, 120.0, 3.0, -1.0];
+        filter.apply(0.0, &mut frame);
+        assert_eq!(frame, [200.0, 5.0, 0.0, 170.0, 0.0, 0.0, 95.0, 3.0, -1.0]);
+    }
+
+    #[test]
+    fn pose_filter_smooths_switches_and_resets() {
+        let skeleton = two_joint_arm();
+        let mut off = PoseFilter::new(&skeleton, None, None);
+        assert!(!off.smoothing_enabled() && !off.limits_enabled());
+        let mut frame = [1.0, 2.0, 3.0, 179.0, 0.0, 0.0, 10.0, 0.0, 0.0];
+        let copy = frame;
+        off.apply(0.0, &mut frame);
+        assert_eq!(frame, copy);
+
+        let mut on = PoseFilter::new(&skeleton, Some(SmoothingParams::default()), None);
+        let mut first = [0.0, 0.0, 0.0, 179.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        on.apply(0.0, &mut first);
+        let mut second = [10.0, 0.0, 0.0, -179.0, 0.0, 0.0, 10.0, 0.0, 0.0];
+        on.apply(1.0 / 30.0, &mut second);
+        assert!(second[0] > 0.0 && second[0] < 10.0, "{}", second[0]);
+        assert!(second[3].abs() > 178.0, "crosses ±180: {}", second[3]);
+        on.reset();
+        let mut third = [5.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        on.apply(2.0, &mut third);
+        assert_eq!(third[0], 5.0, "after a reset the first frame passes");
+    }
+
+    #[test]
+    fn limits_survive_a_toml_round_trip() {
+        let limits = JointLimits::learn(&[arm_motion(&[175.0, -170.0, 179.5])], 2.5);
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join(JOINT_LIMITS_FILE);
+        limits.save(&path).expect("save");
+        let back = JointLimits::load(&path).expect("load");
+        assert_eq!(back, limits);
+        let r = back.get("elbow", Channel::Zrotation).expect("range");
+        assert_eq!((r.min, r.max), (172.5, 192.5));
+    }
+
+    #[test]
+    fn limits_of_real_mocap_keep_its_frames_and_round_trip() {
+        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_09_01_run.bvh");
+        let motion = Motion::load(&clip).expect("clip");
+        let limits = JointLimits::learn(std::slice::from_ref(&motion), DEFAULT_MARGIN_DEG);
+        let text = limits.to_toml().expect("serialises");
+        let back = JointLimits::parse(&text, Path::new("joint_limits.toml")).expect("parses");
+        assert_eq!(back, limits);
+        let mut filter = PoseFilter::new(&motion.skeleton, None, Some(&back));
+        for frame in motion.frames() {
+            let mut clamped = frame.to_vec();
+            filter.apply(0.0, &mut clamped);
+            assert_eq!(clamped, frame, "a training frame is inside its own limits");
+        }
+    }
+
+    #[test]
+    fn malformed_files_name_the_field() {
+        let p = Path::new("joint_limits.toml");
+        let good = JointLimits::learn(&[arm_motion(&[0.0, 30.0])], 5.0)
+            .to_toml()
+            .expect("serialises");
+        JointLimits::parse(&good, p).expect("valid");
+        let cases = [
+            (good.replacen("version = 1", "version = 9", 1), "version"),
+            (good.replacen("min = -5.0", "min = \"low\"", 1), "min"),
+            (
+                good.replacen("max = 35.0", "max = -50.0", 1),
+                "limit[0].max",
+            ),
+            (
+                good.replacen("channel = \"Zrotation\"", "channel = \"Xposition\"", 1),
+                "limit[0].channel",
+            ),
+            (good.replacen("version = 1\n", "", 1), "version"),
+            (format!("{good}\nextra = 1\n"), "extra"),
+        ];
+        for (text, field) in cases {
+            assert_ne!(text, good, "{field}: the fixture did not change");
+            let err = JointLimits::parse(&text, p).expect_err(field).to_string();
+            assert!(
+                err.contains(field) && err.contains("joint_limits.toml"),
+                "{field}: {err}"
+            );
+        }
+        let err = JointLimits::load(Path::new("/nonexistent/joint_limits.toml")).unwrap_err();
+        assert!(err.to_string().contains("/nonexistent/joint_limits.toml"));
+    }
+}

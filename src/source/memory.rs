@@ -1,0 +1,106 @@
+//! Frames held in memory, replayed as a stream: the benchmark's input (decoded once, so file
+//! decoding does not count against the pipeline) and a source that fails on cue for tests of what
+//! the pipeline keeps when a camera dies mid-take.
+
+use std::time::Duration;
+
+use super::{Frame, FrameSource, SourceError};
+
+/// Replays `frames` cyclically for `length` frames at `fps`, optionally failing like an unplugged
+/// camera at frame `fail_at`.
+#[derive(Clone, Debug)]
+pub struct MemorySource {
+    frames: Vec<image::RgbImage>,
+    size: (u32, u32),
+    fps: f64,
+    length: u64,
+    next: u64,
+    fail_at: Option<u64>,
+}
+
+impl MemorySource {
+    /// `None` when `frames` is empty or the frames differ in size.
+    pub fn new(frames: Vec<image::RgbImage>, fps: f64, length: u64) -> Option<MemorySource> {
+        let size = frames.first()?.dimensions();
+        frames.iter().all(|f| f.dimensions() == size).then_some(MemorySource {
+            frames,
+            size,
+            fps,
+            length,
+            next: 0,
+            fail_at: None,
+        })
+    }
+
+    /// Frame `index` fails with a device error that ends the stream.
+    pub fn failing_at(mut self, index: u64) -> MemorySource {
+        self.fail_at = Some(index);
+        self
+    }
+}
+
+impl FrameSource for MemorySource {
+    fn next_frame(&mut self) -> Result<Option<Frame>, SourceError> {
+        if self.next >= self.length || self.fail_at.is_some_and(|f| self.next > f) {
+            return Ok(None);
+        }
+        let index = self.next;
+        self.next += 1;
+        if self.fail_at == Some(index) {
+            return Err(SourceError::Device {
+                device: "memory".to_owned(),
+                action: "dequeue a frame",
+                source: std::io::Error::from_raw_os_error(19), // ENODEV: the device went away
+            });
+        }
+        let image = self.frames[(index % self.frames.len() as u64) as usize].clone();
+        Ok(Some(Frame {
+            index,
+            timestamp: Duration::from_secs_f64(index as f64 / self.fps),
+            image,
+        }))
+    }
+
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    fn frame_rate(&self) -> Option<f64> {
+        Some(self.fps)
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "{} frames in memory, {}x{} @{}fps, replayed for {}",
+            self.frames.len(),
+            self.size.0,
+            self.size.1,
+            self.fps,
+            self.length
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn replays_cyclically_and_fails_on_cue() {
+        let frames = vec![image::RgbImage::new(2, 2), image::RgbImage::from_pixel(2, 2, image::Rgb([9, 9, 9]))];
+        let mut source = MemorySource::new(frames, 10.0, 5).expect("frames").failing_at(3);
+        let mut seen = Vec::new();
+        let error = loop {
+            match source.next_frame() {
+                Ok(Some(f)) => seen.push((f.index, f.image.get_pixel(0, 0).0[0], f.timestamp)),
+                Ok(None) => break None,
+                Err(e) => break Some(e),
+            }
+        };
+        assert_eq!(seen.iter().map(|s| (s.0, s.1)).collect::<Vec<_>>(), [(0, 0), (1, 9), (2, 0)]);
+        assert_eq!(seen[2].2, Duration::from_millis(200));
+        assert!(error.is_some_and(|e| e.to_string().contains("dequeue")));
+        assert!(matches!(source.next_frame(), Ok(None)));
+        assert!(MemorySource::new(Vec::new(), 30.0, 1).is_none());
+    }
+}

@@ -1,0 +1,482 @@
+//! The try-on stages after the pose: body size → cloth → garment render → composite with overlays.
+//!
+//! [`ClothStage`] turns each estimated pose (BVH channels of the regressor's template skeleton) into a
+//! simulated garment. It first measures the person ([`BodySizeEstimator`], a few frames of silhouette
+//! against the template body at the marker-pitch depth), then builds the collision rig at that size,
+//! generates (or loads) the garment around its rest pose, dresses it — blended from the rest pose into
+//! the current pose and settled — and from then on advances the cloth by the real time between frames
+//! in fixed substeps, with the body interpolated at every substep. When nobody is seen the garment
+//! is hidden; after [`LOST_AFTER_FRAMES`] such frames the garment is taken off and put on again when
+//! the person comes back.
+//!
+//! [`RenderStage`] draws the garment from the camera's viewpoint ([`crate::render`]) and composites
+//! it into the frame with the debug overlays the user switched on ([`crate::composite`]).
+//! [`runner`] runs the stages on their own threads; `suitcap run`, `drape`, `live`, `demo` and
+//! `bench` are built from these pieces.
+
+pub mod runner;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::{Affine3A, Vec2, Vec3};
+use image::RgbImage;
+
+use crate::body::Body;
+use crate::body_size::{BodySize, BodySizeEstimator};
+use crate::camera::Camera;
+use crate::cloth::garment::{GarmentError, GarmentKind, GarmentMesh, GarmentParams};
+use crate::cloth::material::Material;
+use crate::cloth::proxies::{BodyRig, DEFAULT_MARGIN_CM};
+use crate::cloth::solver::{Cloth, ClothError, FrameQuality, SolverSettings};
+use crate::cloth::Capsule;
+use crate::composite::{CompositeError, Compositor, MarkerDot, TextStyle};
+use crate::descriptor::markers::DetectedMarker;
+use crate::mask::Mask;
+use crate::render::{GarmentRenderer, RenderSettings};
+use crate::skeleton::Skeleton;
+
+/// Frames without a person after which the garment is taken off (dressed again on return).
+pub const LOST_AFTER_FRAMES: u32 = 15;
+
+/// Which garment to wear.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GarmentChoice {
+    Procedural(GarmentKind),
+    /// A triangle mesh in rest-pose world centimetres (see [`crate::cloth::obj`]).
+    Obj(PathBuf),
+}
+
+impl GarmentChoice {
+    /// `tshirt`, `skirt`, `dress`, or a path ending in `.obj`.
+    pub fn parse(text: &str) -> Result<GarmentChoice, GarmentError> {
+        if text.to_ascii_lowercase().ends_with(".obj") {
+            return Ok(GarmentChoice::Obj(PathBuf::from(text)));
+        }
+        text.parse().map(GarmentChoice::Procedural)
+    }
+
+    pub fn name(&self) -> String {
+        match self {
+            GarmentChoice::Procedural(kind) => kind.name().to_owned(),
+            GarmentChoice::Obj(path) => path.display().to_string(),
+        }
+    }
+
+    /// The next procedural garment (what the live app's garment key switches to).
+    pub fn next(&self) -> GarmentChoice {
+        let kinds = GarmentKind::ALL;
+        let next = match self {
+            GarmentChoice::Procedural(kind) => {
+                let at = kinds.iter().position(|k| k == kind).unwrap_or(0);
+                kinds[(at + 1) % kinds.len()]
+            }
+            GarmentChoice::Obj(_) => kinds[0],
+        };
+        GarmentChoice::Procedural(next)
+    }
+}
+
+/// Live (coarse garment, 16 substeps) or quality (about 4× the vertices, more substeps).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SimulationMode {
+    Live,
+    Quality,
+}
+
+/// How the cloth stage dresses the person.
+#[derive(Clone, Debug)]
+pub struct ClothOptions {
+    pub garment: GarmentChoice,
+    pub material: Material,
+    pub mode: SimulationMode,
+    /// Frames with a person used to measure their size before the garment is put on.
+    pub sizing_frames: usize,
+    /// Use this size instead of measuring (e.g. when the skeleton is already the person's).
+    pub known_size: Option<BodySize>,
+    /// Garment edge length instead of the mode's (cm).
+    pub edge_cm: Option<f32>,
+}
+
+impl ClothOptions {
+    pub fn new(garment: GarmentChoice, mode: SimulationMode) -> ClothOptions {
+        ClothOptions {
+            garment,
+            material: Material::medium(),
+            mode,
+            sizing_frames: match mode {
+                SimulationMode::Live => 10,
+                SimulationMode::Quality => 20,
+            },
+            known_size: None,
+            edge_cm: None,
+        }
+    }
+
+    fn solver_settings(&self) -> SolverSettings {
+        match self.mode {
+            SimulationMode::Live => SolverSettings::live(),
+            SimulationMode::Quality => SolverSettings::quality(),
+        }
+    }
+
+    fn garment_params(&self) -> GarmentParams {
+        let params = match self.mode {
+            SimulationMode::Live => GarmentParams::live(),
+            SimulationMode::Quality => GarmentParams::quality(),
+        };
+        GarmentParams {
+            edge_cm: self.edge_cm.unwrap_or(params.edge_cm),
+            ..params
+        }
+    }
+}
+
+/// Why the cloth stage cannot dress the person.
+#[derive(Debug, thiserror::Error)]
+pub enum TryOnError {
+    #[error(transparent)]
+    Cloth(#[from] ClothError),
+    #[error(transparent)]
+    Garment(#[from] GarmentError),
+    #[error(transparent)]
+    Body(#[from] crate::body::MissingJoint),
+    #[error("{path}: {message}")]
+    Obj { path: PathBuf, message: String },
+}
+
+/// What the garment is doing in a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ClothStatus {
+    /// Measuring the person: `seen` of `needed` frames.
+    Sizing { seen: usize, needed: usize },
+    /// Simulated and shown.
+    Worn,
+    /// Nobody in view: hidden.
+    NoPerson,
+    /// No garment was asked for.
+    Off,
+}
+
+/// The garment of one frame, owned, for the render stage.
+#[derive(Clone, Debug)]
+pub struct ClothFrame {
+    pub status: ClothStatus,
+    /// World positions (cm); empty unless [`ClothStatus::Worn`].
+    pub positions: Vec<Vec3>,
+    pub triangles: Arc<Vec<[u32; 3]>>,
+    /// The body's collision capsules this frame (depth-only in the render).
+    pub capsules: Vec<Capsule>,
+    pub quality: Option<FrameQuality>,
+    /// The garment was dressed again (a jump in the pose, a new garment, the person came back).
+    pub redressed: bool,
+    pub milliseconds: f64,
+}
+
+impl ClothFrame {
+    pub fn hidden(status: ClothStatus, milliseconds: f64) -> ClothFrame {
+        ClothFrame {
+            status,
+            positions: Vec::new(),
+            triangles: Arc::new(Vec::new()),
+            capsules: Vec::new(),
+            quality: None,
+            redressed: false,
+            milliseconds,
+        }
+    }
+}
+
+struct Simulation {
+    rig: BodyRig,
+    cloth: Cloth,
+    triangles: Arc<Vec<[u32; 3]>>,
+    garment: GarmentChoice,
+}
+
+/// Body size, rig and cloth for one stream.
+pub struct ClothStage {
+    options: ClothOptions,
+    template: Skeleton,
+    template_body: Body,
+    sizer: BodySizeEstimator,
+    size: Option<BodySize>,
+    simulation: Option<Simulation>,
+    /// The pose and time of the last frame the cloth was advanced to.
+    last: Option<(Vec<f32>, f64)>,
+    missing: u32,
+}
+
+impl ClothStage {
+    /// A cloth stage for poses on `template` (the regressor's skeleton, or a mocap clip's).
+    pub fn new(template: &Skeleton, options: ClothOptions) -> Result<ClothStage, TryOnError> {
+        let template_body = crate::body_size::template_body(template)?;
+        Ok(ClothStage {
+            size: options.known_size,
+            options,
+            template: template.clone(),
+            template_body,
+            sizer: BodySizeEstimator::new(),
+            simulation: None,
+            last: None,
+            missing: 0,
+        })
+    }
+
+    /// The person's size once measured.
+    pub fn size(&self) -> Option<BodySize> {
+        self.size
+    }
+
+    pub fn garment(&self) -> &GarmentChoice {
+        &self.options.garment
+    }
+
+    /// Wears another garment from the next frame on.
+    pub fn set_garment(&mut self, garment: GarmentChoice) {
+        self.options.garment = garment;
+    }
+
+    /// Advances to the pose `frame` seen at `time_s` (stream clock, seconds); `person` false when
+    /// nobody was found. `silhouette` and `camera` serve the body-size measurement.
+    pub fn advance(
+        &mut self,
+        frame: &[f32],
+        time_s: f64,
+        person: bool,
+        silhouette: &Mask,
+        camera: &Camera,
+    ) -> Result<ClothFrame, TryOnError> {
+        let started = Instant::now();
+        let ms = |started: Instant| started.elapsed().as_secs_f64() * 1e3;
+        if !person {
+            self.missing += 1;
+            if self.missing >= LOST_AFTER_FRAMES {
+                self.simulation = None;
+                self.last = None;
+            }
+            return Ok(ClothFrame::hidden(ClothStatus::NoPerson, ms(started)));
+        }
+        self.missing = 0;
+        let size = match self.size {
+            Some(size) => size,
+            None => {
+                self.sizer.add_frame(
+                    silhouette,
+                    &self.template_body,
+                    &self.template,
+                    frame,
+                    camera,
+                );
+                if self.sizer.frames() < self.options.sizing_frames {
+                    let status = ClothStatus::Sizing {
+                        seen: self.sizer.frames(),
+                        needed: self.options.sizing_frames,
+                    };
+                    return Ok(ClothFrame::hidden(status, ms(started)));
+                }
+                let size = self.sizer.estimate();
+                self.size = Some(size);
+                size
+            }
+        };
+        let wanted = &self.options.garment;
+        let mut redressed = false;
+        let stale = self
+            .simulation
+            .as_ref()
+            .is_none_or(|s| &s.garment != wanted);
+        if stale || self.last.is_none() {
+            let mut simulation = self.build(size)?;
+            simulation.cloth.dress(&simulation.rig, frame);
+            self.simulation = Some(simulation);
+            redressed = true;
+        } else if let (Some(simulation), Some((last_frame, last_time))) =
+            (self.simulation.as_mut(), self.last.as_ref())
+        {
+            let seconds = (time_s - last_time) as f32;
+            let info = simulation
+                .cloth
+                .advance(&simulation.rig, last_frame, frame, seconds);
+            redressed = info.redressed;
+        }
+        self.last = Some((frame.to_vec(), time_s));
+        let Some(simulation) = self.simulation.as_ref() else {
+            return Ok(ClothFrame::hidden(ClothStatus::NoPerson, ms(started)));
+        };
+        let cloth = &simulation.cloth;
+        Ok(ClothFrame {
+            status: ClothStatus::Worn,
+            positions: cloth.positions().iter().map(|&p| Vec3::from(p)).collect(),
+            triangles: Arc::clone(&simulation.triangles),
+            capsules: cloth.pose().capsules.clone(),
+            quality: Some(cloth.quality()),
+            redressed,
+            milliseconds: ms(started),
+        })
+    }
+
+    fn build(&self, size: BodySize) -> Result<Simulation, TryOnError> {
+        let (subject, skeleton) = size.subject(&self.template);
+        let body = Body::new(&subject, &skeleton)?;
+        let rig = BodyRig::new(skeleton, body, DEFAULT_MARGIN_CM);
+        let mesh = match &self.options.garment {
+            GarmentChoice::Procedural(kind) => {
+                GarmentMesh::generate(*kind, &rig, &self.options.garment_params())?
+            }
+            GarmentChoice::Obj(path) => crate::cloth::obj::load_garment(path, &rig).map_err(|e| {
+                TryOnError::Obj {
+                    path: path.clone(),
+                    message: e.to_string(),
+                }
+            })?,
+        };
+        let cloth = Cloth::new(
+            &mesh,
+            &self.options.material,
+            &self.options.solver_settings(),
+            &rig,
+        )?;
+        Ok(Simulation {
+            triangles: Arc::new(cloth.triangles().to_vec()),
+            rig,
+            cloth,
+            garment: self.options.garment.clone(),
+        })
+    }
+}
+
+/// Which debug overlays to draw.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Overlays {
+    pub mask: bool,
+    pub markers: bool,
+    pub skeleton: bool,
+    pub timings: bool,
+}
+
+/// What the render stage needs to know about the pose of a frame for the overlays.
+#[derive(Clone, Debug, Default)]
+pub struct PoseOverlay {
+    pub mask: Option<Mask>,
+    pub markers: Vec<DetectedMarker>,
+    /// Projected bones: (parent joint pixel, child joint pixel).
+    pub bones: Vec<(Vec2, Vec2)>,
+}
+
+impl PoseOverlay {
+    /// The overlay data of a pose: the mask, the markers and the skeleton (`frame` on `skeleton`)
+    /// projected through `camera`.
+    pub fn new(
+        mask: Option<Mask>,
+        markers: Vec<DetectedMarker>,
+        skeleton: &Skeleton,
+        frame: &[f32],
+        camera: &Camera,
+    ) -> PoseOverlay {
+        let mut world: Vec<Affine3A> = Vec::new();
+        skeleton.forward_kinematics(frame, &mut world);
+        let pixel = |i: usize| {
+            world
+                .get(i)
+                .and_then(|t| camera.project(Vec3::from(t.translation)))
+                .map(|p| p.pixel)
+        };
+        let bones = skeleton
+            .joints()
+            .iter()
+            .enumerate()
+            .filter_map(|(i, joint)| Some((pixel(joint.parent?)?, pixel(i)?)))
+            .collect();
+        PoseOverlay {
+            mask,
+            markers,
+            bones,
+        }
+    }
+}
+
+/// Garment renderer and compositor for one stream.
+pub struct RenderStage {
+    renderer: GarmentRenderer,
+    compositor: Compositor,
+    /// RGB of each suit marker colour, for the marker overlay.
+    marker_colours: Vec<[u8; 3]>,
+}
+
+impl RenderStage {
+    pub fn new(settings: RenderSettings, marker_colours: Vec<[u8; 3]>) -> RenderStage {
+        RenderStage {
+            renderer: GarmentRenderer::new(settings),
+            compositor: Compositor::new(settings.parallel),
+            marker_colours,
+        }
+    }
+
+    /// Draws the garment (when worn) and the overlays into `frame`; `text` lines go top left when
+    /// timings are on, `banner` lines (status, recording, drops) always. Returns the milliseconds
+    /// spent rendering and compositing.
+    pub fn draw(
+        &mut self,
+        frame: &mut RgbImage,
+        camera: &Camera,
+        cloth: &ClothFrame,
+        pose: &PoseOverlay,
+        overlays: Overlays,
+        text: &[String],
+        banner: &[String],
+    ) -> Result<(f64, f64), CompositeError> {
+        let started = Instant::now();
+        let worn = cloth.status == ClothStatus::Worn && !cloth.positions.is_empty();
+        if worn {
+            self.renderer
+                .render(camera, &cloth.positions, &cloth.triangles, &cloth.capsules);
+        }
+        let render_ms = started.elapsed().as_secs_f64() * 1e3;
+        let started = Instant::now();
+        let plain = overlays == Overlays::default() && banner.is_empty();
+        if plain {
+            if worn {
+                self.compositor.composite(frame, self.renderer.layer())?;
+            }
+        } else {
+            let mut canvas = self.compositor.canvas(frame)?;
+            if let (true, Some(mask)) = (overlays.mask, pose.mask.as_ref()) {
+                canvas.mask(mask, [255, 0, 255, 70])?;
+            }
+            if worn {
+                canvas.garment(self.renderer.layer())?;
+            }
+            if overlays.markers {
+                let dots: Vec<MarkerDot> = pose
+                    .markers
+                    .iter()
+                    .map(|m| MarkerDot {
+                        centre: m.centre,
+                        colour: self
+                            .marker_colours
+                            .get(m.colour)
+                            .copied()
+                            .unwrap_or([255, 255, 255]),
+                    })
+                    .collect();
+                canvas.markers(&dots, 3.0);
+            }
+            if overlays.skeleton {
+                canvas.skeleton(&pose.bones, [255, 230, 0], 2.0);
+            }
+            let style = TextStyle::default();
+            let mut y = 6.0;
+            if !banner.is_empty() {
+                canvas.text(6.0, y, banner, &style);
+                y += (banner.len() as f32) * 8.0 * style.scale as f32 + 8.0;
+            }
+            if overlays.timings && !text.is_empty() {
+                canvas.text(6.0, y, text, &style);
+            }
+            canvas.finish(frame)?;
+        }
+        Ok((render_ms, started.elapsed().as_secs_f64() * 1e3))
+    }
+}

@@ -1,0 +1,388 @@
+//! The whole pipeline on threads: capture → pose → cloth → render + composite → the caller's sink.
+//!
+//! Each stage runs on its own thread, joined to the next by a bounded [`StageQueue`]. Camera frames
+//! enter a [`Full::DropOldest`] queue when the input is live, so a machine that falls behind drops
+//! old frames (counted, and shown) instead of delaying the picture; recorded input waits instead and
+//! loses nothing. Every later queue waits, so every pose that was estimated reaches the sink, which
+//! records it. The sink (on the calling thread, where a window must live) gets one [`Output`] per
+//! processed frame, in order.
+//!
+//! Stopping: the sink returning `false`, or [`Controls::stop`] (set by Ctrl-C/SIGTERM), stops the
+//! capture; the frames already in flight still drain through every stage, so the take ends cleanly.
+//! A source that fails mid-stream (a camera unplugged) ends the stream the same way, and the error is
+//! in the [`RunSummary`] for the caller to report after it has written what was recorded.
+
+use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread;
+use std::time::Instant;
+
+use image::RgbImage;
+
+use crate::camera::Camera;
+use crate::pipeline::{PoseFrame, PosePipeline};
+use crate::pose::smoothing::PoseFilter;
+use crate::queue::{Full, StageQueue};
+use crate::source::{FrameSource, SourceError};
+
+use super::{ClothFrame, ClothStage, ClothStatus, GarmentChoice, Overlays, PoseOverlay, RenderStage};
+
+/// Settings the user changes while the pipeline runs (the live window's keys, signals).
+#[derive(Debug, Default)]
+pub struct Controls {
+    /// Stop capturing; what is in flight still finishes.
+    pub stop: AtomicBool,
+    overlays: AtomicU8,
+    garment: Mutex<Option<GarmentChoice>>,
+}
+
+impl Controls {
+    pub fn new(overlays: Overlays) -> Arc<Controls> {
+        let controls = Controls::default();
+        controls.set_overlays(overlays);
+        Arc::new(controls)
+    }
+
+    pub fn overlays(&self) -> Overlays {
+        let bits = self.overlays.load(Ordering::Relaxed);
+        Overlays {
+            mask: bits & 1 != 0,
+            markers: bits & 2 != 0,
+            skeleton: bits & 4 != 0,
+            timings: bits & 8 != 0,
+        }
+    }
+
+    pub fn set_overlays(&self, o: Overlays) {
+        let bits = o.mask as u8 | (o.markers as u8) << 1 | (o.skeleton as u8) << 2 | (o.timings as u8) << 3;
+        self.overlays.store(bits, Ordering::Relaxed);
+    }
+
+    /// Asks the cloth stage to switch garments at its next frame.
+    pub fn switch_garment(&self, garment: GarmentChoice) {
+        if let Ok(mut slot) = self.garment.lock() {
+            *slot = Some(garment);
+        }
+    }
+
+    fn take_garment(&self) -> Option<GarmentChoice> {
+        self.garment.lock().ok().and_then(|mut slot| slot.take())
+    }
+
+    pub fn stopped(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+}
+
+/// Milliseconds each stage spent on one frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameTimes {
+    pub segment: f64,
+    pub describe: f64,
+    pub regress: f64,
+    pub cloth: f64,
+    pub render: f64,
+    pub composite: f64,
+    /// From the frame leaving the source to the composited picture reaching the sink.
+    pub latency: f64,
+}
+
+/// One finished frame.
+pub struct Output {
+    pub index: u64,
+    pub timestamp_s: f64,
+    /// The frame with the garment and overlays composited in.
+    pub image: RgbImage,
+    /// The pose, smoothed and limited as configured: BVH channels of the pose stage's skeleton.
+    pub pose: PoseFrame,
+    pub cloth: ClothFrame,
+    pub times: FrameTimes,
+    /// Camera frames dropped so far because the pipeline was behind.
+    pub dropped: u64,
+    /// The cloth stage's error for this frame (garment hidden), if any.
+    pub cloth_error: Option<String>,
+}
+
+/// What a run did besides the frames.
+#[derive(Clone, Debug, Default)]
+pub struct RunSummary {
+    pub frames: u64,
+    pub dropped: u64,
+    /// Corrupt input frames, each named.
+    pub skipped: Vec<String>,
+    /// Why the source stopped early (a camera unplugged, an unreadable file), if it did.
+    pub source_error: Option<String>,
+    pub stopped_by_user: bool,
+    pub seconds: f64,
+}
+
+/// The pose stage: the suit's pose pipeline plus temporal smoothing and joint limits.
+pub struct PoseStage {
+    pub pipeline: PosePipeline,
+    pub filter: Option<PoseFilter>,
+}
+
+impl PoseStage {
+    fn process(&mut self, image: &RgbImage, camera: &Camera, time_s: f64) -> PoseFrame {
+        let mut pose = self.pipeline.process(image, camera, None);
+        if let Some(filter) = &mut self.filter {
+            if pose.person {
+                filter.apply(time_s, &mut pose.frame);
+            } else {
+                filter.reset();
+            }
+        }
+        pose
+    }
+}
+
+/// Whether the input is a live camera (drop old frames) or recorded (never drop).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InputKind {
+    Live,
+    Recorded,
+}
+
+struct Captured {
+    index: u64,
+    timestamp_s: f64,
+    image: RgbImage,
+    started: Instant,
+}
+
+struct Posed {
+    captured: Captured,
+    pose: PoseFrame,
+}
+
+struct Dressed {
+    posed: Posed,
+    cloth: ClothFrame,
+    cloth_error: Option<String>,
+}
+
+const QUEUE_FRAMES: usize = 2;
+
+/// Runs the pipeline until the source ends, fails, or is stopped. `open_source` runs on the capture
+/// thread (camera handles need not be `Send`); `banner` gives the sink-independent lines drawn on
+/// every frame (e.g. "REC"); `sink` gets every output in order and returns `false` to stop.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    open_source: impl FnOnce() -> Result<Box<dyn FrameSource>, SourceError> + Send,
+    input: InputKind,
+    camera: Camera,
+    mut pose_stage: PoseStage,
+    mut cloth_stage: Option<ClothStage>,
+    mut render_stage: RenderStage,
+    controls: Arc<Controls>,
+    banner: impl Fn() -> Vec<String> + Send,
+    mut sink: impl FnMut(Output) -> bool,
+) -> RunSummary {
+    let policy = match input {
+        InputKind::Live => Full::DropOldest,
+        InputKind::Recorded => Full::Wait,
+    };
+    let captured: StageQueue<Captured> = StageQueue::new(QUEUE_FRAMES, policy);
+    let posed: StageQueue<Posed> = StageQueue::new(QUEUE_FRAMES, Full::Wait);
+    let dressed: StageQueue<Dressed> = StageQueue::new(QUEUE_FRAMES, Full::Wait);
+    let finished: StageQueue<Output> = StageQueue::new(QUEUE_FRAMES, Full::Wait);
+    let started = Instant::now();
+    let mut summary = RunSummary::default();
+    let skeleton = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
+
+    thread::scope(|scope| {
+        let capture = {
+            let (queue, controls) = (captured.clone(), Arc::clone(&controls));
+            scope.spawn(move || capture_frames(open_source, &queue, &controls))
+        };
+        {
+            let (input, output) = (captured.clone(), posed.clone());
+            let camera = camera;
+            scope.spawn(move || {
+                while let Some(captured) = input.pop() {
+                    let pose = pose_stage.process(&captured.image, &camera, captured.timestamp_s);
+                    if output.push(Posed { captured, pose }).is_err() {
+                        break;
+                    }
+                }
+                input.close();
+                output.close();
+            });
+        }
+        {
+            let (input, output, controls) = (posed.clone(), dressed.clone(), Arc::clone(&controls));
+            scope.spawn(move || {
+                while let Some(posed) = input.pop() {
+                    let p = &posed.pose;
+                    let (cloth, cloth_error) = match cloth_stage.as_mut() {
+                        None => (ClothFrame::hidden(ClothStatus::Off, 0.0), None),
+                        Some(stage) => {
+                            if let Some(garment) = controls.take_garment() {
+                                stage.set_garment(garment);
+                            }
+                            let time = posed.captured.timestamp_s;
+                            match stage.advance(&p.frame, time, p.person, &p.mask, &camera) {
+                                Ok(cloth) => (cloth, None),
+                                Err(e) => (
+                                    ClothFrame::hidden(ClothStatus::Off, 0.0),
+                                    Some(e.to_string()),
+                                ),
+                            }
+                        }
+                    };
+                    let item = Dressed {
+                        posed,
+                        cloth,
+                        cloth_error,
+                    };
+                    if output.push(item).is_err() {
+                        break;
+                    }
+                }
+                input.close();
+                output.close();
+            });
+        }
+        {
+            let (input, output, controls) =
+                (dressed.clone(), finished.clone(), Arc::clone(&controls));
+            let dropped_from = captured.clone();
+            scope.spawn(move || {
+                let mut last_times = FrameTimes::default();
+                while let Some(Dressed {
+                    posed,
+                    cloth,
+                    cloth_error,
+                }) = input.pop()
+                {
+                    let Posed { captured, pose } = posed;
+                    let overlays = controls.overlays();
+                    let overlay = PoseOverlay::new(
+                        overlays.mask.then(|| pose.mask.clone()),
+                        if overlays.markers {
+                            pose.markers.clone()
+                        } else {
+                            Vec::new()
+                        },
+                        &skeleton,
+                        &pose.frame,
+                        &camera,
+                    );
+                    let dropped = dropped_from.dropped();
+                    let mut lines = banner();
+                    if dropped > 0 {
+                        lines.push(format!("DROPPED {dropped}"));
+                    }
+                    if !pose.person {
+                        lines.push("NO PERSON".to_owned());
+                    }
+                    if let ClothStatus::Sizing { seen, needed } = &cloth.status {
+                        lines.push(format!("MEASURING {seen}/{needed}"));
+                    }
+                    let text = timing_lines(&last_times);
+                    let mut image = captured.image;
+                    let (render, composite) = render_stage
+                        .draw(&mut image, &camera, &cloth, &overlay, overlays, &text, &lines)
+                        .unwrap_or((0.0, 0.0));
+                    let times = FrameTimes {
+                        segment: pose.times.segment,
+                        describe: pose.times.describe,
+                        regress: pose.times.regress,
+                        cloth: cloth.milliseconds,
+                        render,
+                        composite,
+                        latency: captured.started.elapsed().as_secs_f64() * 1e3,
+                    };
+                    last_times = times;
+                    let out = Output {
+                        index: captured.index,
+                        timestamp_s: captured.timestamp_s,
+                        image,
+                        pose,
+                        cloth,
+                        times,
+                        dropped,
+                        cloth_error,
+                    };
+                    if output.push(out).is_err() {
+                        break;
+                    }
+                }
+                input.close();
+                output.close();
+            });
+        }
+        while let Some(out) = finished.pop() {
+            summary.frames += 1;
+            if !sink(out) {
+                controls.stop.store(true, Ordering::Relaxed);
+            }
+        }
+        let (skipped, error) = capture.join().unwrap_or_else(|_| {
+            (Vec::new(), Some("the capture thread panicked".to_owned()))
+        });
+        summary.skipped = skipped;
+        summary.source_error = error;
+    });
+    summary.dropped = captured.dropped();
+    summary.stopped_by_user = controls.stopped();
+    summary.seconds = started.elapsed().as_secs_f64();
+    summary
+}
+
+/// The capture thread: reads frames into `queue` until the end, a failure or a stop. Returns the
+/// skipped corrupt frames and the error that ended the stream, if any.
+fn capture_frames(
+    open_source: impl FnOnce() -> Result<Box<dyn FrameSource>, SourceError>,
+    queue: &StageQueue<Captured>,
+    controls: &Controls,
+) -> (Vec<String>, Option<String>) {
+    let mut skipped = Vec::new();
+    let mut source = match open_source() {
+        Ok(source) => source,
+        Err(e) => {
+            queue.close();
+            return (skipped, Some(e.to_string()));
+        }
+    };
+    let mut error = None;
+    while !controls.stopped() {
+        match source.next_frame() {
+            Ok(Some(frame)) => {
+                let item = Captured {
+                    index: frame.index,
+                    timestamp_s: frame.timestamp.as_secs_f64(),
+                    image: frame.image,
+                    started: Instant::now(),
+                };
+                if queue.push(item).is_err() {
+                    break;
+                }
+            }
+            Ok(None) => break,
+            Err(e @ (SourceError::CorruptFrame { .. } | SourceError::SizeMismatch { .. })) => {
+                skipped.push(e.to_string());
+            }
+            Err(e) => {
+                error = Some(e.to_string());
+                break;
+            }
+        }
+    }
+    queue.close();
+    (skipped, error)
+}
+
+fn timing_lines(t: &FrameTimes) -> Vec<String> {
+    vec![
+        format!(
+            "SEG {:.1} DESC {:.1} RVM {:.1} MS",
+            t.segment, t.describe, t.regress
+        ),
+        format!(
+            "CLOTH {:.1} RENDER {:.1} COMP {:.1} MS",
+            t.cloth, t.render, t.composite
+        ),
+        format!("LATENCY {:.0} MS", t.latency),
+    ]
+}
