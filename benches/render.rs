@@ -9,6 +9,7 @@
 use std::f32::consts::{PI, TAU};
 use std::hint::black_box;
 
+use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
 use image::RgbImage;
@@ -17,6 +18,40 @@ use suitcap::camera::{Camera, Intrinsics};
 use suitcap::cloth::Capsule;
 use suitcap::composite::{Compositor, TextStyle};
 use suitcap::render::{GarmentRenderer, RenderSettings};
+
+/// CPU time of the measuring thread (from `/proc/thread-self/schedstat`, in ns): the single-threaded
+/// cost, unaffected by other processes taking the machine's two cores in turn.
+struct ThreadCpu;
+
+fn thread_cpu_ns() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    text.split_whitespace().next()?.parse().ok()
+}
+
+impl Measurement for ThreadCpu {
+    type Intermediate = u64;
+    type Value = u64;
+
+    fn start(&self) -> u64 {
+        thread_cpu_ns().unwrap_or(0)
+    }
+    fn end(&self, start: u64) -> u64 {
+        thread_cpu_ns().unwrap_or(0).saturating_sub(start)
+    }
+    fn add(&self, a: &u64, b: &u64) -> u64 {
+        a + b
+    }
+    fn zero(&self) -> u64 {
+        0
+    }
+    fn to_f64(&self, value: &u64) -> f64 {
+        *value as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        static WALL: WallTime = WallTime;
+        WALL.formatter()
+    }
+}
 
 const CENTRE: Vec3 = Vec3::new(0.0, 120.0, 0.0);
 
@@ -106,38 +141,37 @@ fn scene() -> (Camera, Vec<Vec3>, Vec<[u32; 3]>, Vec<Capsule>, RgbImage) {
     (camera, v, t, body(), frame)
 }
 
-fn bench(c: &mut Criterion) {
+fn report_scene() -> (Camera, Vec<Vec3>, Vec<[u32; 3]>, Vec<Capsule>, RgbImage) {
     let (camera, vertices, triangles, capsules, frame) = scene();
+    let mut renderer = GarmentRenderer::default();
+    let layer = renderer.render(&camera, &vertices, &triangles, &capsules);
+    if let Some(bounds) = layer.bounds() {
+        let drawn = layer.data().chunks(4).filter(|p| p[3] > 0).count();
+        eprintln!(
+            "garment: {} vertices, {} triangles, {} capsules; layer {}×{} at ({}, {}), {} pixels drawn ({:.1} % of the frame)",
+            vertices.len(),
+            triangles.len(),
+            capsules.len(),
+            bounds.width,
+            bounds.height,
+            bounds.x,
+            bounds.y,
+            drawn,
+            100.0 * drawn as f64 / (1280.0 * 720.0)
+        );
+    }
+    (camera, vertices, triangles, capsules, frame)
+}
+
+/// The benchmarks of one group: `parallel` selects rayon bands in renderer and compositor.
+fn benches_for<M: Measurement>(c: &mut Criterion<M>, group: &str, modes: &[(&str, bool)]) {
+    let (camera, vertices, triangles, capsules, frame) = report_scene();
     let mut renderer = GarmentRenderer::default();
     let layer = renderer
         .render(&camera, &vertices, &triangles, &capsules)
         .clone();
-    let bounds = layer.bounds().expect("the garment is in view");
-    let drawn = layer.data().chunks(4).filter(|p| p[3] > 0).count();
-    eprintln!(
-        "garment: {} vertices, {} triangles, {} capsules; layer {}×{} at ({}, {}), {} pixels drawn ({:.1} % of the frame)",
-        vertices.len(),
-        triangles.len(),
-        capsules.len(),
-        bounds.width,
-        bounds.height,
-        bounds.x,
-        bounds.y,
-        drawn,
-        100.0 * drawn as f64 / (1280.0 * 720.0)
-    );
-
-    {
-        let t = std::time::Instant::now();
-        for _ in 0..200 {
-            renderer.render(&camera, &vertices, &triangles, &capsules);
-        }
-        let total = t.elapsed().as_secs_f64() * 1e3 / 200.0;
-        let p: Vec<f64> = suitcap::render::band::PROBE.iter().map(|a| a.load(std::sync::atomic::Ordering::Relaxed) as f64 / 200.0 / 1e6).collect();
-        eprintln!("PROBE total {total:.2} ms; front {:.2} tiles {:.2} capsules+tiles {:.2} back {:.2} fins {:.2} captri {} capfrag {}", p[0], p[1], p[2], p[3], p[4], p[5]*1e6, p[6]*1e6);
-    }
-    let mut g = c.benchmark_group("render_1280x720");
-    for (name, parallel) in [("single", false), ("rayon", true)] {
+    let mut g = c.benchmark_group(group);
+    for &(name, parallel) in modes {
         renderer.set_settings(RenderSettings {
             parallel,
             ..RenderSettings::default()
@@ -175,9 +209,26 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group! {
-    name = benches;
-    config = Criterion::default().sample_size(40);
-    targets = bench
+/// Wall-clock time, one thread and rayon.
+fn wall(c: &mut Criterion) {
+    benches_for(c, "render_1280x720", &[("single", false), ("rayon", true)]);
 }
-criterion_main!(benches);
+
+/// CPU time of the one thread doing the work (skipped where the kernel does not report it).
+fn cpu(c: &mut Criterion<ThreadCpu>) {
+    if thread_cpu_ns().is_some() {
+        benches_for(c, "render_1280x720_thread_cpu", &[("single", false)]);
+    }
+}
+
+criterion_group! {
+    name = wall_clock;
+    config = Criterion::default().sample_size(40);
+    targets = wall
+}
+criterion_group! {
+    name = thread_cpu;
+    config = Criterion::default().with_measurement(ThreadCpu).sample_size(40);
+    targets = cpu
+}
+criterion_main!(wall_clock, thread_cpu);

@@ -17,7 +17,7 @@
 
 use glam::{Affine3A, Vec3};
 
-use crate::body::{Body, BodyPart, Subject, BASE_HEIGHT_CM};
+use crate::body::{Body, PartMesh, Subject, BASE_HEIGHT_CM};
 use crate::camera::Camera;
 use crate::mask::Mask;
 use crate::raster::{draw_triangle, Cull, DepthBuffer, ScreenVertex};
@@ -106,40 +106,47 @@ pub fn frame_ratios(silhouette: &Mask, model: &Mask) -> Option<(f32, f32)> {
 /// Rasterizes the capsules of `body` posed by `world` into a person mask as `camera` sees it.
 /// `depth` is scratch space, resized as needed.
 pub fn body_mask(body: &Body, world: &[Affine3A], camera: &Camera, depth: &mut DepthBuffer) -> Mask {
-    let (width, height) = (camera.intrinsics.width, camera.intrinsics.height);
-    depth.clear(width, height);
-    let mut pixels = vec![false; width as usize * height as usize];
-    for part in &body.parts {
-        draw_part(part, world, camera, depth, &mut pixels);
-    }
-    Mask::from_pixels(width, height, pixels).unwrap_or_else(|| Mask::empty(width, height))
+    BodyMasker::new(body).mask(world, camera, depth)
 }
 
-fn draw_part(
-    part: &BodyPart,
-    world: &[Affine3A],
-    camera: &Camera,
-    depth: &mut DepthBuffer,
-    pixels: &mut [bool],
-) {
-    let Some(transform) = world.get(part.joint) else {
-        return;
-    };
-    let mesh = part.mesh(16, 4.0);
-    let projected: Vec<Option<ScreenVertex>> = mesh
-        .vertices
-        .iter()
-        .map(|v| {
-            camera
-                .project(transform.transform_point3(v.position))
-                .map(ScreenVertex::from)
-        })
-        .collect();
-    for t in &mesh.triangles {
-        let [Some(a), Some(b), Some(c)] = t.map(|i| projected[i as usize]) else {
-            continue;
-        };
-        draw_triangle(depth, [a, b, c], Cull::None, 1.0, |f| pixels[f.index] = true);
+/// A body's part meshes, built once, rasterized into person masks for any pose.
+#[derive(Clone, Debug)]
+pub struct BodyMasker {
+    parts: Vec<(usize, PartMesh)>,
+    projected: Vec<Option<ScreenVertex>>,
+}
+
+impl BodyMasker {
+    pub fn new(body: &Body) -> BodyMasker {
+        BodyMasker {
+            parts: body.parts.iter().map(|p| (p.joint, p.mesh(16, 4.0))).collect(),
+            projected: Vec::new(),
+        }
+    }
+
+    /// The mask of the body posed by `world` (joint transforms) as `camera` sees it.
+    pub fn mask(&mut self, world: &[Affine3A], camera: &Camera, depth: &mut DepthBuffer) -> Mask {
+        let (width, height) = (camera.intrinsics.width, camera.intrinsics.height);
+        depth.clear(width, height);
+        let mut pixels = vec![false; width as usize * height as usize];
+        for (joint, mesh) in &self.parts {
+            let Some(transform) = world.get(*joint) else {
+                continue;
+            };
+            self.projected.clear();
+            self.projected.extend(mesh.vertices.iter().map(|v| {
+                camera
+                    .project(transform.transform_point3(v.position))
+                    .map(ScreenVertex::from)
+            }));
+            for t in &mesh.triangles {
+                let [Some(a), Some(b), Some(c)] = t.map(|i| self.projected[i as usize]) else {
+                    continue;
+                };
+                draw_triangle(depth, [a, b, c], Cull::None, 1.0, |f| pixels[f.index] = true);
+            }
+        }
+        Mask::from_pixels(width, height, pixels).unwrap_or_else(|| Mask::empty(width, height))
     }
 }
 
@@ -149,6 +156,7 @@ pub struct BodySizeEstimator {
     scales: Vec<f32>,
     girths: Vec<f32>,
     depth: Option<DepthBuffer>,
+    masker: Option<BodyMasker>,
 }
 
 impl BodySizeEstimator {
@@ -157,8 +165,8 @@ impl BodySizeEstimator {
     }
 
     /// Adds one frame: the person's `silhouette` and the template `body` posed by `frame` (channel
-    /// values of `skeleton`, the template skeleton the body was built on). Returns whether the frame
-    /// counted.
+    /// values of `skeleton`, the template skeleton the body was built on; the same body on every
+    /// call, its meshes are kept). Returns whether the frame counted.
     pub fn add_frame(
         &mut self,
         silhouette: &Mask,
@@ -172,7 +180,8 @@ impl BodySizeEstimator {
         let depth = self
             .depth
             .get_or_insert_with(|| DepthBuffer::new(silhouette.width(), silhouette.height()));
-        let model = body_mask(body, &world, camera, depth);
+        let masker = self.masker.get_or_insert_with(|| BodyMasker::new(body));
+        let model = masker.mask(&world, camera, depth);
         match frame_ratios(silhouette, &model) {
             Some((s, g)) => {
                 self.scales.push(s);

@@ -53,6 +53,8 @@ pub struct PoseFrame {
     /// Root position channels before the position correction, and the image shift it applied.
     pub root_before_correction: [f32; 3],
     pub correction: Option<glam::Vec2>,
+    /// The image shift the silhouette registration applied to the root after the correction.
+    pub registration: Option<glam::Vec2>,
     pub times: PoseTimes,
 }
 
@@ -69,6 +71,10 @@ pub struct PosePipeline {
     lut: crate::segment::features::ColourLut,
     /// Move the root onto the head, hand and shoe blobs (on by default).
     pub position_correction: bool,
+    /// Then centre the posed template body on the silhouette (on by default; `None` when the
+    /// skeleton lacks the body model's joints).
+    registration: Option<crate::pose::registration::Registration>,
+    pub silhouette_registration: bool,
 }
 
 impl PosePipeline {
@@ -86,6 +92,9 @@ impl PosePipeline {
         let pose = vec![0.0; regressor.layout.len()];
         let correction_parts =
             crate::pose::correction::CorrectionParts::new(&regressor.skeleton.skeleton);
+        let registration = crate::body_size::template_body(&regressor.skeleton.skeleton)
+            .ok()
+            .map(|body| crate::pose::registration::Registration::new(&body));
         Ok(PosePipeline {
             suit,
             segmenter,
@@ -97,6 +106,8 @@ impl PosePipeline {
             correction_parts,
             lut: crate::segment::features::ColourLut::new(),
             position_correction: true,
+            registration,
+            silhouette_registration: true,
         })
     }
 
@@ -135,6 +146,7 @@ impl PosePipeline {
                 pose: Vec::new(),
                 root_before_correction,
                 correction: None,
+                registration: None,
                 times,
             };
         };
@@ -171,6 +183,16 @@ impl PosePipeline {
             }
             _ => None,
         };
+        let registration = match (&mut self.registration, self.silhouette_registration) {
+            (Some(registration), true) => registration.register(
+                &self.regressor.skeleton.skeleton,
+                &mut frame,
+                self.regressor.layout.root_position,
+                &mask,
+                camera,
+            ),
+            _ => None,
+        };
         times.regress = ms(started);
         self.last = Some(frame.clone());
         PoseFrame {
@@ -181,6 +203,7 @@ impl PosePipeline {
             pose: self.pose.clone(),
             root_before_correction,
             correction,
+            registration,
             times,
         }
     }

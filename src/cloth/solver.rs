@@ -247,6 +247,11 @@ pub struct Cloth {
     capsule_groups: Vec<u8>,
     /// Collision group of each vertex: that of the capsule nearest to it at rest.
     vertex_groups: Vec<u8>,
+    /// Per vertex, this substep: the last contact's normal (zero if none) and the body surface's
+    /// displacement there.
+    contact_normal: Vec<Vec3A>,
+    contact_motion: Vec<Vec3A>,
+    contact_depth: Vec<f32>,
     // Per-frame broad phase.
     swept: Vec<Aabb>,
     candidate_start: Vec<u32>,
@@ -362,6 +367,9 @@ impl Cloth {
             swept: Vec::new(),
             candidate_start: Vec::new(),
             candidates: Vec::new(),
+            contact_normal: vec![Vec3A::ZERO; n],
+            contact_motion: vec![Vec3A::ZERO; n],
+            contact_depth: vec![0.0; n],
             candidate_origin: vec![Vec3A::ZERO; n],
             candidate_reach2: vec![-1.0; n],
             all_capsules: Vec::new(),
@@ -793,8 +801,25 @@ impl Cloth {
         }
         let inv_h = 1.0 / h;
         let max_speed = self.settings.max_speed;
-        for ((v, x), p) in self.v.iter_mut().zip(&self.x).zip(&self.prev) {
+        let mu = self.material.friction;
+        for (k, ((v, x), p)) in self.v.iter_mut().zip(&self.x).zip(&self.prev).enumerate() {
             let mut velocity = (*x - *p) * inv_h;
+            // Contact: the push out of a capsule is a position fix, not a bounce, so the velocity
+            // away from the surface (relative to the surface's own motion) is dropped — a vertex
+            // caught where two capsules overlap would otherwise gain speed every substep. Coulomb
+            // friction then takes up to μ × the normal velocity change (depth / h) off the sliding
+            // velocity. Friction at the velocity level leaves the constraint projections alone.
+            let n = self.contact_normal[k];
+            if n != Vec3A::ZERO {
+                let surface = self.contact_motion[k] * inv_h;
+                let relative = velocity - surface;
+                let along = relative.dot(n);
+                let tangential = relative - n * along;
+                let slide = tangential.length();
+                let stop = mu * self.contact_depth[k] * inv_h;
+                let kept = if slide > stop { 1.0 - stop / slide } else { 0.0 };
+                velocity = surface + tangential * kept + n * along.min(0.0);
+            }
             let speed2 = velocity.length_squared();
             if speed2 > max_speed * max_speed {
                 velocity *= max_speed / speed2.sqrt();
@@ -891,13 +916,14 @@ impl Cloth {
 
     fn solve_collisions(&mut self) {
         let offset = self.settings.collision_offset;
-        let mu = self.material.friction;
-        for v in 0..self.x.len() {
+                for v in 0..self.x.len() {
             let reach2 = self.candidate_reach2[v];
             if reach2 < 0.0 {
                 continue;
             }
             let mut p = self.x[v];
+            self.contact_normal[v] = Vec3A::ZERO;
+            self.contact_depth[v] = 0.0;
             let group = self.vertex_groups[v];
             let list: &[u16] = if (p - self.candidate_origin[v]).length_squared() <= reach2 {
                 let (a, b) = (
@@ -908,6 +934,9 @@ impl Cloth {
             } else {
                 &self.all_capsules
             };
+            // Depenetrate (twice when caught between capsules: arms first, the trunk last) and
+            // remember the deepest contact for the velocity update (friction).
+            let mut deepest: Option<(f32, Vec3A, usize)> = None;
             for _pass in 0..2 {
                 let mut touched = 0;
                 for &c in list {
@@ -919,12 +948,8 @@ impl Cloth {
                     if d < offset {
                         let depth = offset - d;
                         p += n * depth;
-                        let surface_motion = p - self.back[c].transform_point3a(p);
-                        let relative = p - self.prev[v] - surface_motion;
-                        let tangential = relative - n * relative.dot(n);
-                        let slide = tangential.length();
-                        if slide > 0.0 {
-                            p -= tangential * (mu * depth / slide).min(1.0);
+                        if deepest.is_none_or(|(best, _, _)| depth > best) {
+                            deepest = Some((depth, n, c));
                         }
                         touched += 1;
                     }
@@ -932,6 +957,11 @@ impl Cloth {
                 if touched < 2 {
                     break;
                 }
+            }
+            if let Some((depth, n, c)) = deepest {
+                self.contact_normal[v] = n;
+                self.contact_motion[v] = p - self.back[c].transform_point3a(p);
+                self.contact_depth[v] = depth;
             }
             self.x[v] = p;
         }
@@ -1346,5 +1376,32 @@ mod scratch6 {
                 if k % 15 == 14 { println!("{kind:?} walkpose {k} {:?}", cloth.quality()); }
             }
         }
+    }
+}
+#[cfg(test)]
+mod scratch7 {
+    use super::*;
+    #[test]
+    fn still_strain() {
+        let rig = crate::cloth::garment::tests::chidi();
+        let mesh = GarmentMesh::generate(GarmentKind::TShirt, &rig, &GarmentParams::live()).unwrap();
+        let mut settings = SolverSettings::live();
+        settings.blend_frames = 1; settings.settle_frames = 0;
+        let mut cloth = Cloth::new(&mesh, &Material::medium(), &settings, &rig).unwrap();
+        let rest = rig.rest_frame();
+        cloth.dress(&rig, &rest);
+        for _ in 0..60 { cloth.step_frame(&rig, &rest, &rest); }
+        let mut worst: Vec<(f32, usize)> = cloth.edges.iter().enumerate().map(|(k, e)| ((cloth.x[e.i as usize].distance(cloth.x[e.j as usize]) - e.rest) / e.rest, k)).collect();
+        worst.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
+        for (s, k) in worst.iter().take(12) {
+            let e = cloth.edges[*k];
+            println!("strain {s:.3} edge {} {} rest {:.2} at {:?} w {} {}", e.i, e.j, e.rest, cloth.rest[e.i as usize], cloth.inv_mass[e.i as usize], cloth.inv_mass[e.j as usize]);
+        }
+        let pos = worst.iter().filter(|w| w.0 > 0.0).count();
+        println!("stretched {pos} of {}", worst.len());
+        let k95 = worst.len() / 20;
+        println!("5% boundary strain {:?}", worst[k95]);
+        let pos: Vec<Vec3> = cloth.positions().iter().map(|&p| p.into()).collect();
+        crate::cloth::garment::viz::render("/tmp/still.png", &pos, cloth.triangles(), &cloth.pose().capsules);
     }
 }

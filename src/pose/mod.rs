@@ -15,6 +15,7 @@ pub mod chart;
 pub mod correction;
 pub mod eval;
 pub mod regressor;
+pub mod registration;
 pub mod rvm;
 pub mod smoothing;
 

@@ -18,6 +18,7 @@
 
 use crate::raster::{draw_triangle, Cull, DepthBuffer, Fragment, ScreenVertex};
 
+use super::capsule_mesh::CapsuleMesh;
 use super::occlusion::TileDepth;
 use super::silhouette::{
     edge_coverage, facing, fin, silhouette_owner, Facing, MeshEdge, FIN_WIDTH,
@@ -34,13 +35,21 @@ pub struct Scene<'a> {
     pub intensity: &'a [[f32; 2]],
     /// Outside and inside colour.
     pub colours: [[f32; 3]; 2],
-    /// The tessellated capsules, `capsule_vertex_count` vertices each.
+    /// The tessellation the capsules were made with, their projected vertices one after the other,
+    /// and where each capsule's vertices start.
+    pub capsule_mesh: &'a CapsuleMesh,
     pub capsule_screen: &'a [ScreenVertex],
-    pub capsule_vertex_count: usize,
-    pub capsule_triangles: &'a [[u32; 3]],
+    pub capsule_spans: &'a [CapsuleSpan],
     /// Mesh edges for the fins (empty: no antialiasing).
     pub edges: &'a [MeshEdge],
     pub near: f32,
+}
+
+/// One capsule's vertices in [`Scene::capsule_screen`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CapsuleSpan {
+    pub start: usize,
+    pub cone_segments: u32,
 }
 
 /// The per-band buffers, kept between frames.
@@ -96,7 +105,6 @@ impl Band {
         let h = height as f32;
         let near = scene.near;
 
-        let t0 = std::time::Instant::now();
         // 1. Front faces.
         for (tri, _) in scene
             .triangles
@@ -113,40 +121,33 @@ impl Band {
                 shade_fragment(pixels, &f, &lit, &scene.colours)
             });
         }
-        let t1 = std::time::Instant::now();
         self.tiles.build(&self.depth);
-        let t2 = std::time::Instant::now();
 
         // 2. Capsules, depth-only; where they are in front of the cloth they erase it.
         let mut drew_capsule = false;
-        if scene.capsule_vertex_count > 0 {
-            for verts in scene
-                .capsule_screen
-                .chunks_exact(scene.capsule_vertex_count)
-            {
-                if self.capsule_hidden(verts, shift) {
+        for span in scene.capsule_spans {
+            let count = scene.capsule_mesh.vertex_count(span.cone_segments);
+            let Some(verts) = scene.capsule_screen.get(span.start..span.start + count) else {
+                continue;
+            };
+            if self.capsule_hidden(verts, shift) {
+                continue;
+            }
+            for tri in scene.capsule_mesh.triangles(span.cone_segments) {
+                let v = fetch(tri, verts, shift);
+                if misses(&v, h) || facing(v, near) != Facing::Front || self.tiles.occludes(&v) {
                     continue;
                 }
-                for tri in scene.capsule_triangles {
-                    let v = fetch(tri, verts, shift);
-                    if misses(&v, h) || facing(v, near) != Facing::Front || self.tiles.occludes(&v)
-                    {
-                        continue;
-                    }
-                    drew_capsule = true;
-                    PROBE[5].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    draw_triangle(&mut self.depth, v, Cull::Back, near, |f| {
-                        PROBE[6].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        pixels[4 * f.index..4 * f.index + 4].fill(0)
-                    });
-                }
+                drew_capsule = true;
+                draw_triangle(&mut self.depth, v, Cull::Back, near, |f| {
+                    pixels[4 * f.index..4 * f.index + 4].fill(0)
+                });
             }
         }
         if drew_capsule {
             self.tiles.build(&self.depth);
         }
 
-        let t3 = std::time::Instant::now();
         // 3. Back faces: the inside of the garment, where nothing nearer covers it.
         for (tri, _) in scene
             .triangles
@@ -164,18 +165,9 @@ impl Band {
             });
         }
 
-        let t4 = std::time::Instant::now();
         // 4. Antialiasing fins outside the silhouette edges.
         for edge in scene.edges {
             self.draw_fin(scene, edge, shift, pixels);
-        }
-        let t5 = std::time::Instant::now();
-        use std::sync::atomic::Ordering::Relaxed;
-        for (k, d) in [t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4]
-            .iter()
-            .enumerate()
-        {
-            PROBE[k].fetch_add(d.as_nanos() as u64, Relaxed);
         }
     }
 
@@ -238,6 +230,3 @@ impl Band {
         }
     }
 }
-
-pub static PROBE: [std::sync::atomic::AtomicU64; 8] =
-    [const { std::sync::atomic::AtomicU64::new(0) }; 8];

@@ -5,9 +5,10 @@
 //! surface is a spherical cap on each sphere joined by the cone tangent to both: with axis
 //! `u = (b − a)/L` and `sin φ = (radius_a − radius_b)/L`, the surface normal at elevation `α` (measured
 //! from the equator towards `u`) is `cos α·radial + sin α·u`; sphere A carries `α ∈ [−90°, φ]`, sphere B
-//! `α ∈ [φ, 90°]`, and the cone is the band between the two rings at `α = φ`. [`CapsuleMesh`] keeps
-//! the triangle list (fixed for a given resolution) and writes the world-space vertices of one capsule,
-//! shrunk by an inset, into a caller's buffer. Every vertex lies on the (inset) surface, so the mesh is
+//! `α ∈ [φ, 90°]`, and the cone is the band between the two rings at `α = φ`, cut along the axis
+//! into as many bands as keep its triangles about as long as wide. [`CapsuleMesh`] keeps the triangle
+//! lists (fixed for a given resolution and number of cone bands) and writes the world-space vertices
+//! of one capsule, shrunk by an inset, into a caller's buffer. Every vertex lies on the (inset) surface, so the mesh is
 //! inscribed and never pokes out of it. Triangles are wound so `(b − a) × (c − a)` points outward, the
 //! convention [`crate::raster::Cull`] expects; the renderer draws them with back faces culled.
 
@@ -77,7 +78,8 @@ impl CapsuleMesh {
         let shape = Profile::of(capsule, inset)?;
         let k = self.rings_per_cap;
         let cone_length = shape.a.distance(shape.b) * shape.phi.cos();
-        let width = std::f32::consts::TAU * shape.radius_a.max(shape.radius_b) / self.segments as f32;
+        let width =
+            std::f32::consts::TAU * shape.radius_a.max(shape.radius_b) / self.segments as f32;
         let n = ((cone_length / (1.5 * width.max(1e-3))).ceil() as u32).clamp(1, MAX_CONE_SEGMENTS);
         out.push(shape.a - shape.axis * shape.radius_a);
         // Sphere A: α from just above the south pole up to φ (inclusive).
@@ -86,25 +88,18 @@ impl CapsuleMesh {
             self.push_ring(out, &shape, shape.a, shape.radius_a, alpha);
         }
         // The cone: rings between the two tangent rings, on the straight lines joining them.
-        let ring = self.segments as usize;
-        let start_a = out.len() - ring;
-        self.push_ring(out, &shape, shape.b, shape.radius_b, shape.phi);
-        let start_b = out.len() - ring;
+        let (sin_phi, cos_phi) = shape.phi.sin_cos();
         for j in 1..n {
             let t = j as f32 / n as f32;
-            for s in 0..ring {
-                let p = out[start_a + s].lerp(out[start_b + s], t);
-                out.push(p);
-            }
+            out.extend(self.around.iter().map(|&(c, s)| {
+                let normal = (shape.e1 * c + shape.e2 * s) * cos_phi + shape.axis * sin_phi;
+                let on_a = shape.a + normal * shape.radius_a;
+                let on_b = shape.b + normal * shape.radius_b;
+                on_a.lerp(on_b, t)
+            }));
         }
-        // Sphere B: α from φ (inclusive) up to just below the north pole; its first ring, at φ, was
-        // written above — move it after the cone's rings.
-        let first_b: Vec<Vec3> = Vec::new();
-        let _ = first_b;
-        out.copy_within(start_b..start_b + ring, out.len() - ring);
-        out.drain(start_b..start_b + ring);
-        out.extend_from_within(start_b - ring..start_b - ring);
-        for j in 1..k {
+        // Sphere B: α from φ (inclusive) up to just below the north pole.
+        for j in 0..k {
             let alpha = shape.phi + (FRAC_PI_2 - shape.phi) * j as f32 / k as f32;
             self.push_ring(out, &shape, shape.b, shape.radius_b, alpha);
         }
@@ -234,10 +229,11 @@ mod tests {
     fn triangles_are_wound_outward_and_the_mesh_is_closed() {
         let mesh = CapsuleMesh::new(12, 3);
         let mut v = Vec::new();
-        assert!(mesh.vertices(&capsule(), 0.0, &mut v));
-        assert_eq!(v.len(), mesh.vertex_count());
+        let n = mesh.vertices(&capsule(), 0.0, &mut v).expect("drawable");
+        assert!(n > 1, "a 30 cm capsule of radius 8 is cut along the cone");
+        assert_eq!(v.len(), mesh.vertex_count(n));
         let c = capsule();
-        for t in mesh.triangles() {
+        for t in mesh.triangles(n) {
             let [p, q, r] = t.map(|i| v[i as usize]);
             let n = (q - p).cross(r - p);
             let centroid = (p + q + r) / 3.0;
@@ -246,7 +242,7 @@ mod tests {
         }
         // Closed: every undirected edge is shared by exactly two triangles.
         let mut edges = std::collections::HashMap::new();
-        for t in mesh.triangles() {
+        for t in mesh.triangles(n) {
             for k in 0..3 {
                 let (i, j) = (t[k], t[(k + 1) % 3]);
                 *edges.entry((i.min(j), i.max(j))).or_insert(0) += 1;
@@ -257,18 +253,29 @@ mod tests {
 
     #[test]
     fn vertices_lie_on_the_inset_surface() {
-        // Every vertex lies on one of the two inset spheres, and no point of the hull is farther
-        // from the axis than the larger sphere allows.
+        // Every vertex lies on one of the two inset spheres or on the cone tangent to both: at axial
+        // position t its distance from the axis is the cone's radius there.
         let mesh = CapsuleMesh::new(10, 2);
         let mut v = Vec::new();
         let c = capsule();
-        assert!(mesh.vertices(&c, 1.0, &mut v));
+        let (ra, rb, length) = (7.0f32, 4.0f32, 30.0f32);
+        let sin_phi = (ra - rb) / length;
+        let cos_phi = (1.0 - sin_phi * sin_phi).sqrt();
+        let (ta, tb) = (ra * sin_phi, length + rb * sin_phi);
+        let n = mesh.vertices(&c, 1.0, &mut v).expect("drawable");
+        let mut on_cone = 0;
         for p in &v {
-            let on_a = (p.distance(c.a) - 7.0).abs() < 1e-3;
-            let on_b = (p.distance(c.b) - 4.0).abs() < 1e-3;
-            assert!(on_a || on_b, "{p}");
+            let on_a = (p.distance(c.a) - ra).abs() < 1e-3;
+            let on_b = (p.distance(c.b) - rb).abs() < 1e-3;
+            let t = p.y; // the axis is world Y from the origin
+            let rho = (p.x * p.x + p.z * p.z).sqrt();
+            let cone = ra * cos_phi + (rb - ra) * cos_phi * (t - ta) / (tb - ta);
+            let on_side = (ta..=tb).contains(&t) && (rho - cone).abs() < 1e-3;
+            on_cone += usize::from(on_side && !on_a && !on_b);
+            assert!(on_a || on_b || on_side, "{p}");
         }
-        assert!(!mesh.vertices(&c, 9.0, &mut v));
+        assert_eq!(on_cone, (n as usize - 1) * 10);
+        assert!(mesh.vertices(&c, 9.0, &mut v).is_none());
         assert!(v.is_empty());
     }
 
@@ -282,7 +289,7 @@ mod tests {
             radius_a: 10.0,
             radius_b: 2.0,
         };
-        assert!(mesh.vertices(&c, 0.0, &mut v));
+        assert_eq!(mesh.vertices(&c, 0.0, &mut v), Some(1));
         assert!(v.iter().all(|p| (p.length() - 10.0).abs() < 1e-3));
     }
 }

@@ -42,7 +42,7 @@ use tiny_skia::{Pixmap, PixmapRef};
 use crate::camera::Camera;
 use crate::cloth::Capsule;
 use crate::raster::ScreenVertex;
-use band::{Band, Scene};
+use band::{Band, CapsuleSpan, Scene};
 use capsule_mesh::CapsuleMesh;
 use silhouette::{EdgeTable, Facing};
 
@@ -247,8 +247,10 @@ pub struct GarmentRenderer {
     facing: Vec<Facing>,
     edges: EdgeTable,
     capsule_world: Vec<Vec3>,
-    /// The capsules in view, tessellated and projected, `capsule_mesh.vertex_count()` each.
+    /// The capsules in view, tessellated and projected, one after the other …
     capsule_screen: Vec<ScreenVertex>,
+    /// … where each starts and how many cone bands it has.
+    capsule_spans: Vec<CapsuleSpan>,
     bands: Vec<Band>,
 }
 
@@ -271,6 +273,7 @@ impl GarmentRenderer {
             edges: EdgeTable::default(),
             capsule_world: Vec::new(),
             capsule_screen: Vec::new(),
+            capsule_spans: Vec::new(),
             bands: Vec::new(),
         }
     }
@@ -340,9 +343,9 @@ impl GarmentRenderer {
             facing: &self.facing,
             intensity: &self.intensity,
             colours: [style.front, style.back].map(|c| c.map(f32::from)),
+            capsule_mesh: &self.capsule_mesh,
             capsule_screen: &self.capsule_screen,
-            capsule_vertex_count: self.capsule_mesh.vertex_count(),
-            capsule_triangles: self.capsule_mesh.triangles(),
+            capsule_spans: &self.capsule_spans,
             edges: if self.settings.antialias {
                 self.edges.edges()
             } else {
@@ -390,14 +393,15 @@ impl GarmentRenderer {
         let near = self.settings.near;
         let (w, h) = (rect.width as f32, rect.height as f32);
         self.capsule_screen.clear();
+        self.capsule_spans.clear();
         for capsule in capsules {
-            if !self.capsule_mesh.vertices(
+            let Some(cone_segments) = self.capsule_mesh.vertices(
                 capsule,
                 self.settings.capsule_inset,
                 &mut self.capsule_world,
-            ) {
+            ) else {
                 continue;
-            }
+            };
             let start = self.capsule_screen.len();
             self.capsule_screen.extend(
                 self.capsule_world
@@ -406,7 +410,12 @@ impl GarmentRenderer {
             );
             let in_view = screen_extent(&self.capsule_screen[start..])
                 .is_some_and(|(lo, hi)| hi.x >= 0.0 && hi.y >= 0.0 && lo.x <= w && lo.y <= h);
-            if !in_view {
+            if in_view {
+                self.capsule_spans.push(CapsuleSpan {
+                    start,
+                    cone_segments,
+                });
+            } else {
                 self.capsule_screen.truncate(start);
             }
         }
