@@ -1,0 +1,227 @@
+//! The try-on commands end to end on a small generated clip, through the real binary: what `run`
+//! writes, and that nothing recorded is lost when the input fails mid-take, a frame is corrupt,
+//! nobody is in view, or the process is told to stop. Also `drape`, `demo` and `suit pattern`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn repo(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+fn suitcap() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_suitcap"))
+}
+
+/// A generated dataset (the tools crate's binary; the test command builds the workspace first).
+fn generated_clip(dir: &Path, frames: usize) -> PathBuf {
+    let synth = Path::new(env!("CARGO_BIN_EXE_suitcap")).with_file_name("suitcap-synth");
+    let status = Command::new(&synth)
+        .arg("--bvh")
+        .arg(repo("tests/data/mocap/cmu_02_01_walk.bvh"))
+        .args(["--frames", &frames.to_string(), "--seed", "3", "--out"])
+        .arg(dir)
+        .status();
+    match status {
+        Ok(s) if s.success() => dir.to_owned(),
+        _ => panic!("cannot run {} (build the workspace first)", synth.display()),
+    }
+}
+
+fn text(output: &Output) -> String {
+    format!(
+        "{}\n{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    )
+}
+
+fn run(input: &Path, camera: &Path, out: &Path, extra: &[&str]) -> Output {
+    suitcap()
+        .arg("run")
+        .arg(input)
+        .arg("--camera")
+        .arg(camera)
+        .arg("--out")
+        .arg(out)
+        .args(["--live-cloth"])
+        .args(extra)
+        .output()
+        .expect("runs")
+}
+
+fn take_frames(path: &Path) -> usize {
+    suitcap::bvh::Motion::load(path)
+        .unwrap_or_else(|e| panic!("{} is not a valid BVH: {e}", path.display()))
+        .frame_count()
+}
+
+#[test]
+fn run_writes_the_take_the_composited_frames_and_a_preview() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let data = generated_clip(&tmp.path().join("clip"), 14);
+    let out = tmp.path().join("out");
+    let output = run(&data.join("frames"), &data.join("camera.toml"), &out, &["--overlays", "skeleton,markers"]);
+    assert!(output.status.success(), "{}", text(&output));
+    assert_eq!(take_frames(&out.join("take.bvh")), 14);
+    for k in 0..14 {
+        assert!(out.join(format!("frames/{k:06}.png")).is_file(), "frame {k}");
+    }
+    let gif = image::open(out.join("preview.gif"));
+    assert!(gif.is_ok(), "preview.gif does not decode");
+    let rows = std::fs::read_to_string(out.join("frames.csv")).expect("frames.csv");
+    assert_eq!(rows.lines().count(), 15);
+    // The garment is put on once the person has been measured.
+    assert!(rows.lines().any(|l| l.contains(",worn,")), "{rows}");
+    assert!(text(&output).contains("per-stage median"), "{}", text(&output));
+}
+
+#[test]
+fn an_input_failing_mid_take_keeps_the_frames_before_it() {
+    use suitcap::source::y4m::{Y4mChroma, Y4mWriter};
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let data = generated_clip(&tmp.path().join("clip"), 8);
+    let y4m = tmp.path().join("take.y4m");
+    let mut writer = Y4mWriter::create(&y4m, 640, 480, 30.0, Y4mChroma::C420).expect("create");
+    for k in 0..8 {
+        let frame = image::open(data.join(format!("frames/{k:06}.png"))).expect("frame").to_rgb8();
+        writer.write_frame(&frame).expect("write");
+    }
+    writer.finish().expect("flush");
+    // Cut the file in the middle of frame 5: the source fails there, like a camera unplugged.
+    let bytes = std::fs::read(&y4m).expect("read");
+    let frame_bytes = 6 + 640 * 480 * 3 / 2;
+    let header = bytes.len() - 8 * frame_bytes;
+    std::fs::write(&y4m, &bytes[..header + 5 * frame_bytes + 1000]).expect("truncate");
+    let out = tmp.path().join("out");
+    let output = run(&y4m, &data.join("camera.toml"), &out, &[]);
+    assert!(!output.status.success(), "{}", text(&output));
+    let message = text(&output);
+    assert!(message.contains("take.y4m") && message.contains("frame 5"), "{message}");
+    assert_eq!(take_frames(&out.join("take.bvh")), 5, "{message}");
+    assert!(out.join("frames/000004.png").is_file());
+}
+
+#[test]
+fn a_corrupt_frame_is_skipped_and_named_and_an_empty_scene_hides_the_garment() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let data = generated_clip(&tmp.path().join("clip"), 12);
+    let frames = data.join("frames");
+    std::fs::write(frames.join("000006.png"), b"not a png").expect("corrupt");
+    // Frame 9: nobody in view (a flat grey picture).
+    image::RgbImage::from_pixel(640, 480, image::Rgb([128, 128, 128]))
+        .save(frames.join("000009.png"))
+        .expect("empty frame");
+    let out = tmp.path().join("out");
+    let output = run(&frames, &data.join("camera.toml"), &out, &[]);
+    let message = text(&output);
+    assert!(output.status.success(), "{message}");
+    assert!(message.contains("1 corrupt frames skipped") && message.contains("000006.png"), "{message}");
+    assert_eq!(take_frames(&out.join("take.bvh")), 11);
+    let rows = std::fs::read_to_string(out.join("frames.csv")).expect("frames.csv");
+    let empty = rows.lines().find(|l| l.starts_with("9,")).expect("row of frame 9");
+    assert!(empty.starts_with("9,0,") && empty.contains(",hidden,"), "{empty}");
+}
+
+#[test]
+fn sigterm_finalises_the_take() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let data = generated_clip(&tmp.path().join("clip"), 40);
+    let out = tmp.path().join("out");
+    let mut child = suitcap()
+        .arg("run")
+        .arg(data.join("frames"))
+        .arg("--camera")
+        .arg(data.join("camera.toml"))
+        .arg("--out")
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawns");
+    // Wait until frames are coming out, then ask it to stop.
+    let first = out.join("frames/000002.png");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while !first.exists() && std::time::Instant::now() < deadline {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let status = Command::new("kill").arg("-TERM").arg(child.id().to_string()).status().expect("kill");
+    assert!(status.success());
+    let output = child.wait_with_output().expect("exits");
+    let message = text(&output);
+    let frames = take_frames(&out.join("take.bvh"));
+    assert!(frames >= 3, "{frames} frames\n{message}");
+    assert!(frames < 40, "the signal did not stop the run early\n{message}");
+    assert!(message.contains("stopped by signal"), "{message}");
+}
+
+#[test]
+fn drape_composites_a_garment_on_the_true_motion_and_reports_quality() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let data = generated_clip(&tmp.path().join("clip"), 10);
+    let out = tmp.path().join("drape");
+    let output = suitcap()
+        .arg("drape")
+        .arg("--motion")
+        .arg(data.join("motion.bvh"))
+        .arg("--camera")
+        .arg(data.join("camera.toml"))
+        .arg("--frames")
+        .arg(data.join("frames"))
+        .args(["--garment", "skirt", "--live-cloth", "--out"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let message = text(&output);
+    assert!(output.status.success(), "{message}");
+    assert!(message.contains("edge strain") && message.contains("ground truth"), "{message}");
+    assert!(out.join("frames/000009.png").is_file());
+    assert!(image::open(out.join("preview.gif")).is_ok());
+    // The garment changed the picture.
+    let before = image::open(data.join("frames/000005.png")).expect("frame").to_rgb8();
+    let after = image::open(out.join("frames/000005.png")).expect("draped").to_rgb8();
+    let changed = before.pixels().zip(after.pixels()).filter(|(a, b)| a != b).count();
+    assert!(changed > 500, "only {changed} pixels changed");
+}
+
+#[test]
+fn the_demo_runs_on_the_bundled_footage() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let output = suitcap()
+        .arg("demo")
+        .arg("--suit")
+        .arg(repo("suits/default"))
+        .arg("--out")
+        .arg(tmp.path())
+        .output()
+        .expect("runs");
+    let message = text(&output);
+    assert!(output.status.success(), "{message}");
+    assert_eq!(take_frames(&tmp.path().join("take.bvh")), 60);
+    assert!(message.contains("mean joint angle error"), "{message}");
+}
+
+#[test]
+fn suit_pattern_writes_true_size_panels() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let output = suitcap()
+        .args(["suit", "pattern", "--suit"])
+        .arg(repo("suits/default"))
+        .args(["--dpi", "30", "--out"])
+        .arg(tmp.path())
+        .output()
+        .expect("runs");
+    assert!(output.status.success(), "{}", text(&output));
+    let svgs = std::fs::read_dir(tmp.path())
+        .expect("dir")
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().extension().is_some_and(|x| x == "svg"))
+        .count();
+    assert_eq!(svgs, 11, "{}", text(&output));
+    let bad = suitcap()
+        .args(["suit", "pattern", "--dpi", "0", "--out"])
+        .arg(tmp.path())
+        .output()
+        .expect("runs");
+    assert!(!bad.status.success() && text(&bad).contains("--dpi"), "{}", text(&bad));
+}
