@@ -705,7 +705,17 @@ pub fn live(
     let device_owned = device.to_owned();
     println!("keys: G garment · M mask · K markers · S skeleton · T timings · R record on/off · Esc/Q quit");
     let summary = runner::run(
-        move || open_source(&device_owned, &options).map(|s| s as Box<dyn FrameSource>),
+        move || {
+            // A recorded file stands in for a camera: deliver it at its own rate.
+            let recorded = Path::new(&device_owned).exists() && !device_owned.starts_with("/dev/");
+            open_source(&device_owned, &options).map(|s| {
+                if recorded {
+                    Box::new(suitcap::source::memory::Paced::new(s)) as Box<dyn FrameSource>
+                } else {
+                    s as Box<dyn FrameSource>
+                }
+            })
+        },
         InputKind::Live,
         camera,
         pose_stage,

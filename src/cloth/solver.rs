@@ -735,12 +735,8 @@ impl Cloth {
         self.all_capsules
             .extend((0..count.min(u16::MAX as usize)).map(|c| c as u16));
         let groups = &self.capsule_groups;
-        self.all_capsules.sort_by_key(|&c| {
-            (
-                Reverse(groups.get(c as usize).copied().unwrap_or(GROUP_TRUNK)),
-                c,
-            )
-        });
+        self.all_capsules
+            .sort_by_key(|&c| (groups.get(c as usize).copied().unwrap_or(GROUP_TRUNK), c));
         let offset = self.settings.collision_offset;
         let fall = 0.5 * self.settings.gravity.length() * seconds * seconds;
         self.candidate_start.clear();
@@ -758,7 +754,7 @@ impl Cloth {
                 max: Vec3::from(p) + Vec3::splat(reach),
             };
             let group = self.vertex_groups[v];
-            // Arm capsules first, the trunk's last; trunk cloth ignores the arms.
+            // Trunk capsules first, then the arms'; trunk cloth ignores the arms.
             for &c in &self.all_capsules {
                 let c = c as usize;
                 if self.swept[c].overlaps(&around) && self.collides(group, c) {
@@ -794,9 +790,9 @@ impl Cloth {
             }
         }
         for _ in 0..self.settings.iterations {
-            self.solve_tethers();
             self.solve_stretch();
             self.solve_bending();
+            self.solve_tethers();
             self.solve_collisions();
         }
         let inv_h = 1.0 / h;
@@ -934,28 +930,41 @@ impl Cloth {
             } else {
                 &self.all_capsules
             };
-            // Depenetrate (twice when caught between capsules: arms first, the trunk last) and
-            // remember the deepest contact for the velocity update (friction).
+            // Depenetrate from the trunk; then, for arm cloth not lying on the trunk, from the arms,
+            // and from the trunk again if an arm pushed it in (the trunk wins where they overlap).
+            // Remember the deepest contact for the velocity update (friction).
             let mut deepest: Option<(f32, Vec3A, usize)> = None;
-            for _pass in 0..2 {
-                let mut touched = 0;
-                for &c in list {
-                    let c = c as usize;
-                    if !self.boxes[c].contains(Vec3::from(p)) || !self.collides(group, c) {
-                        continue;
-                    }
-                    let (d, n) = self.prepared[c].query(p);
-                    if d < offset {
-                        let depth = offset - d;
-                        p += n * depth;
-                        if deepest.is_none_or(|(best, _, _)| depth > best) {
-                            deepest = Some((depth, n, c));
-                        }
-                        touched += 1;
-                    }
+            let mut on_trunk = false;
+            let trunk = |c: &&u16| self.capsule_groups.get(**c as usize) == Some(&GROUP_TRUNK);
+            let mut resolve = |p: &mut Vec3A, c: usize, deepest: &mut Option<(f32, Vec3A, usize)>| {
+                if !self.boxes[c].contains(Vec3::from(*p)) {
+                    return (false, false);
                 }
-                if touched < 2 {
-                    break;
+                let (d, n) = self.prepared[c].query(*p);
+                if d < offset {
+                    let depth = offset - d;
+                    *p += n * depth;
+                    if deepest.is_none_or(|(best, _, _)| depth > best) {
+                        *deepest = Some((depth, n, c));
+                    }
+                    (true, true)
+                } else {
+                    (false, d < offset + 0.05)
+                }
+            };
+            for &c in list.iter().filter(trunk) {
+                let (_, touching) = resolve(&mut p, c as usize, &mut deepest);
+                on_trunk |= touching;
+            }
+            if group == GROUP_ARMS && !on_trunk {
+                let mut pushed = false;
+                for &c in list.iter().filter(|c| !trunk(c)) {
+                    pushed |= resolve(&mut p, c as usize, &mut deepest).0;
+                }
+                if pushed {
+                    for &c in list.iter().filter(trunk) {
+                        resolve(&mut p, c as usize, &mut deepest);
+                    }
                 }
             }
             if let Some((depth, n, c)) = deepest {

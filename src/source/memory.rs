@@ -104,3 +104,46 @@ mod tests {
         assert!(MemorySource::new(Vec::new(), 30.0, 1).is_none());
     }
 }
+
+/// Delivers another source's frames no faster than their timestamps, as a camera would: for running
+/// the live app on a recorded file.
+pub struct Paced<S> {
+    inner: S,
+    started: Option<std::time::Instant>,
+}
+
+impl<S: FrameSource> Paced<S> {
+    pub fn new(inner: S) -> Paced<S> {
+        Paced {
+            inner,
+            started: None,
+        }
+    }
+}
+
+impl<S: FrameSource> FrameSource for Paced<S> {
+    fn next_frame(&mut self) -> Result<Option<Frame>, SourceError> {
+        let frame = self.inner.next_frame()?;
+        if let Some(f) = &frame {
+            let started = *self.started.get_or_insert_with(std::time::Instant::now);
+            let due = started + f.timestamp;
+            let now = std::time::Instant::now();
+            if due > now {
+                std::thread::sleep(due - now);
+            }
+        }
+        Ok(frame)
+    }
+
+    fn size(&self) -> (u32, u32) {
+        self.inner.size()
+    }
+
+    fn frame_rate(&self) -> Option<f64> {
+        self.inner.frame_rate()
+    }
+
+    fn describe(&self) -> String {
+        format!("{} (paced)", self.inner.describe())
+    }
+}

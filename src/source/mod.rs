@@ -47,6 +47,21 @@ pub trait FrameSource {
     fn describe(&self) -> String;
 }
 
+impl<S: FrameSource + ?Sized> FrameSource for Box<S> {
+    fn next_frame(&mut self) -> Result<Option<Frame>, SourceError> {
+        (**self).next_frame()
+    }
+    fn size(&self) -> (u32, u32) {
+        (**self).size()
+    }
+    fn frame_rate(&self) -> Option<f64> {
+        (**self).frame_rate()
+    }
+    fn describe(&self) -> String {
+        (**self).describe()
+    }
+}
+
 /// What the user asked for when opening a source.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SourceOptions {
