@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The quick start: set-up included, from a fresh clone.
-#   scripts/run.sh demo   renders a short synthetic suit clip from the bundled mocap into out/
+#   scripts/run.sh demo   the bundled clip through the whole pipeline (pose, garment, compositing) into out/demo
 #   scripts/run.sh test   runs the whole test suite
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,12 +10,7 @@ bash scripts/setup.sh
 case "${1:-}" in
   demo)
     cargo build --release --workspace
-    ./target/release/suitcap-synth --bvh tests/data/mocap/cmu_10_03_kick_ball.bvh --frames 75 \
-      --size 640x480 --seed 1 --out out/synth --overwrite
-    ./target/release/suitcap check --suit suits/default --data out/synth
-    ./target/release/suitcap run out/synth/frames --suit suits/default --out out/pose
-    ./target/release/suitcap-train eval --suit suits/default --data out/synth
-    echo "frames: out/synth/frames/  ground truth: out/synth/motion.bvh  estimated pose: out/pose/take.bvh"
+    ./target/release/suitcap demo --suit suits/default --out out/demo
     ;;
   test)
     # The runtime's integration tests drive the generator binary too: build every binary first.

@@ -78,6 +78,17 @@ pub struct PosePipeline {
 }
 
 impl PosePipeline {
+    /// A second segmenter of the suit, for a thread of its own (the pipeline's stages on threads
+    /// segment frame n + 1 while frame n is described), with the same options as the pipeline's.
+    pub fn load_segmenter(suit_dir: &Path) -> Result<Segmenter, PipelineError> {
+        let suit = SuitDefinition::load_dir(suit_dir)?;
+        Ok(Segmenter::new(
+            SegmenterTables::load(suit_dir)?,
+            &suit,
+            SegmenterOptions::default(),
+        ))
+    }
+
     /// Loads every model of a suit directory.
     pub fn load(suit_dir: &Path) -> Result<PosePipeline, PipelineError> {
         let suit = SuitDefinition::load_dir(suit_dir)?;

@@ -16,7 +16,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use clap::Args;
 
 use suitcap::cloth::garment::{GarmentKind, GarmentMesh};
@@ -85,14 +85,15 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    let frames = super::tryon::load_frames(&dir)?;
     let camera = suitcap::camera::Camera::load(&camera_path)?;
-    let (width, height) = frames.first().context("no frames")?.dimensions();
+    let (width, height) = (camera.intrinsics.width, camera.intrinsics.height);
+    let frame_count = suitcap::source::directory::list_frame_files(&dir)?.len();
     let kind: GarmentKind = args.garment.parse()?;
     let pose_stage = || -> anyhow::Result<PoseStage> {
         Ok(PoseStage {
             pipeline: suitcap::pipeline::PosePipeline::load(&args.suit)?,
             filter: None,
+            segmenter: Some(suitcap::pipeline::PosePipeline::load_segmenter(&args.suit)?),
         })
     };
     let mut pose = pose_stage()?;
@@ -119,7 +120,7 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let mut render = suitcap::tryon::RenderStage::new(Default::default(), Vec::new());
     println!(
         "{} frames of {}x{} from {} replayed for {} frames; garment {} cut to ~{} vertices ({edge:.2} cm edges); {} threads",
-        frames.len(),
+        frame_count,
         width,
         height,
         dir.display(),
@@ -129,7 +130,73 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         rayon::current_num_threads()
     );
 
-    // 1. Sequential.
+    // 1. Pipelined. First from the encoded files (decoded at delivery like a webcam's MJPEG), so
+    //    the peak memory is the pipeline's and not a store of decoded frames; then from frames
+    //    decoded beforehand (the pipeline's own speed), with and without the garment.
+    let files = suitcap::source::directory::list_frame_files(&dir)?
+        .into_iter()
+        .map(|p| Ok((p.display().to_string(), std::fs::read(&p)?)))
+        .collect::<std::io::Result<Vec<_>>>()?;
+    let mut decoded = Vec::new();
+    // (garment, frames decoded beforehand)
+    for (garment, predecoded) in [(true, false), (true, true), (false, true)] {
+        if predecoded && decoded.is_empty() {
+            decoded = super::tryon::load_frames(&dir)?;
+        }
+        let source = if predecoded {
+            MemorySource::new(decoded.clone(), 30.0, args.frames)
+                .ok_or_else(|| anyhow::anyhow!("{}: frames differ in size", dir.display()))?
+        } else {
+            MemorySource::from_encoded(files.clone(), 30.0, args.frames)
+                .map_err(anyhow::Error::msg)?
+        };
+        let controls = Controls::new(Overlays::default());
+        let mut first_done: Option<Instant> = None;
+        let mut count = 0u64;
+        let cloth = if garment {
+            Some(ClothStage::new(&template, cloth_options())?)
+        } else {
+            None
+        };
+        let summary = runner::run(
+            move || Ok(Box::new(source) as Box<dyn suitcap::source::FrameSource>),
+            InputKind::Recorded,
+            camera,
+            pose_stage()?,
+            cloth,
+            suitcap::tryon::RenderStage::new(Default::default(), Vec::new()),
+            Arc::clone(&controls),
+            Vec::new,
+            |_| {
+                count += 1;
+                if count == 5 {
+                    first_done = Some(Instant::now());
+                }
+                true
+            },
+        );
+        if let Some(e) = summary.source_error {
+            bail!("the benchmark's source failed: {e}");
+        }
+        let seconds = first_done.map_or(summary.seconds, |t| t.elapsed().as_secs_f64());
+        let steady_frames = count.saturating_sub(5).max(1);
+        println!(
+            "pipelined (stages on threads), {}, {}: {:.1} frames/s over {} frames after the first 5",
+            if garment { "whole pipeline" } else { "pose only" },
+            if predecoded { "frames decoded beforehand" } else { "JPEG decoded in the capture stage" },
+            steady_frames as f64 / seconds.max(1e-9),
+            steady_frames
+        );
+        if !predecoded {
+            match peak_rss_mb() {
+                Some(mb) => println!("peak resident set of the pipeline: {mb:.0} MB"),
+                None => println!("peak resident set: unknown (no /proc/self/status)"),
+            }
+        }
+    }
+
+    // 2. Sequential, on decoded frames.
+    let frames = decoded;
     let mut s = Samples::default();
     let mut vertices = 0;
     let overlay = suitcap::tryon::PoseOverlay::default();
@@ -175,41 +242,5 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         vertices
     );
 
-    // 2. Pipelined.
-    let source = MemorySource::new(frames.clone(), 30.0, args.frames).context("frames differ in size")?;
-    let controls = Controls::new(Overlays::default());
-    let mut first_done: Option<Instant> = None;
-    let mut count = 0u64;
-    let summary = runner::run(
-        move || Ok(Box::new(source) as Box<dyn suitcap::source::FrameSource>),
-        InputKind::Recorded,
-        camera,
-        pose_stage()?,
-        Some(ClothStage::new(&template, cloth_options())?),
-        suitcap::tryon::RenderStage::new(Default::default(), Vec::new()),
-        Arc::clone(&controls),
-        Vec::new,
-        |_| {
-            count += 1;
-            if count == 5 {
-                first_done = Some(Instant::now());
-            }
-            true
-        },
-    );
-    if let Some(e) = summary.source_error {
-        bail!("the benchmark's source failed: {e}");
-    }
-    let seconds = first_done.map_or(summary.seconds, |t| t.elapsed().as_secs_f64());
-    let steady_frames = count.saturating_sub(5).max(1);
-    println!(
-        "pipelined (stages on threads): {:.1} frames/s over {} frames after the first 5",
-        steady_frames as f64 / seconds.max(1e-9),
-        steady_frames
-    );
-    match peak_rss_mb() {
-        Some(mb) => println!("peak resident set: {mb:.0} MB"),
-        None => println!("peak resident set: unknown (no /proc/self/status)"),
-    }
     Ok(())
 }

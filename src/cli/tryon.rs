@@ -122,7 +122,12 @@ fn pose_stage(suit_dir: &Path, args: &PoseArgs) -> anyhow::Result<PoseStage> {
             limits.as_ref(),
         )
     });
-    Ok(PoseStage { pipeline, filter })
+    let segmenter = Some(PosePipeline::load_segmenter(suit_dir)?);
+    Ok(PoseStage {
+        pipeline,
+        filter,
+        segmenter,
+    })
 }
 
 /// The camera of an input: `--camera`, else camera.toml beside the input, else in the suit.

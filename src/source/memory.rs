@@ -1,6 +1,7 @@
-//! Frames held in memory, replayed as a stream: the benchmark's input (decoded once, so file
-//! decoding does not count against the pipeline) and a source that fails on cue for tests of what
-//! the pipeline keeps when a camera dies mid-take.
+//! Frames held in memory, replayed as a stream: the benchmark's input and a source that fails on cue
+//! for tests of what the pipeline keeps when a camera dies mid-take. Frames are kept either decoded
+//! or as the encoded bytes of their files (JPEG, PNG), decoded at every delivery like the MJPEG
+//! stream of a webcam, which keeps a high-resolution clip small in memory.
 
 use std::time::Duration;
 
@@ -10,7 +11,7 @@ use super::{Frame, FrameSource, SourceError};
 /// camera at frame `fail_at`.
 #[derive(Clone, Debug)]
 pub struct MemorySource {
-    frames: Vec<image::RgbImage>,
+    frames: Vec<Stored>,
     size: (u32, u32),
     fps: f64,
     length: u64,
@@ -18,11 +19,42 @@ pub struct MemorySource {
     fail_at: Option<u64>,
 }
 
+#[derive(Clone, Debug)]
+enum Stored {
+    Decoded(image::RgbImage),
+    Encoded(Vec<u8>),
+}
+
 impl MemorySource {
     /// `None` when `frames` is empty or the frames differ in size.
     pub fn new(frames: Vec<image::RgbImage>, fps: f64, length: u64) -> Option<MemorySource> {
         let size = frames.first()?.dimensions();
-        frames.iter().all(|f| f.dimensions() == size).then_some(MemorySource {
+        if frames.iter().any(|f| f.dimensions() != size) {
+            return None;
+        }
+        MemorySource::from_stored(frames.into_iter().map(Stored::Decoded).collect(), size, fps, length)
+    }
+
+    /// Frames kept as encoded image files, decoded when delivered. `Err` names the first file that
+    /// does not decode or differs in size from the first.
+    pub fn from_encoded(files: Vec<(String, Vec<u8>)>, fps: f64, length: u64) -> Result<MemorySource, String> {
+        let mut size = None;
+        for (name, bytes) in &files {
+            let dims = image::load_from_memory(bytes)
+                .map_err(|e| format!("{name}: {e}"))?
+                .to_rgb8()
+                .dimensions();
+            if *size.get_or_insert(dims) != dims {
+                return Err(format!("{name}: {}x{} differs from the first frame", dims.0, dims.1));
+            }
+        }
+        let size = size.ok_or("no frames")?;
+        let stored = files.into_iter().map(|(_, b)| Stored::Encoded(b)).collect();
+        MemorySource::from_stored(stored, size, fps, length).ok_or_else(|| "no frames".to_owned())
+    }
+
+    fn from_stored(frames: Vec<Stored>, size: (u32, u32), fps: f64, length: u64) -> Option<MemorySource> {
+        (!frames.is_empty()).then_some(MemorySource {
             frames,
             size,
             fps,
@@ -53,7 +85,16 @@ impl FrameSource for MemorySource {
                 source: std::io::Error::from_raw_os_error(19), // ENODEV: the device went away
             });
         }
-        let image = self.frames[(index % self.frames.len() as u64) as usize].clone();
+        let image = match &self.frames[(index % self.frames.len() as u64) as usize] {
+            Stored::Decoded(image) => image.clone(),
+            Stored::Encoded(bytes) => image::load_from_memory(bytes)
+                .map_err(|e| SourceError::CorruptFrame {
+                    source_name: "memory".to_owned(),
+                    index,
+                    reason: e.to_string(),
+                })?
+                .to_rgb8(),
+        };
         Ok(Some(Frame {
             index,
             timestamp: Duration::from_secs_f64(index as f64 / self.fps),

@@ -1,4 +1,5 @@
-//! The whole pipeline on threads: capture → pose → cloth → render + composite → the caller's sink.
+//! The whole pipeline on threads: capture → segment → pose → cloth → render + composite → the
+//! caller's sink.
 //!
 //! Each stage runs on its own thread, joined to the next by a bounded [`StageQueue`]. Camera frames
 //! enter a [`Full::DropOldest`] queue when the input is live, so a machine that falls behind drops
@@ -22,7 +23,9 @@ use image::RgbImage;
 use crate::camera::Camera;
 use crate::pipeline::{PoseFrame, PosePipeline};
 use crate::pose::smoothing::PoseFilter;
+use crate::mask::Mask;
 use crate::queue::{Full, StageQueue};
+use crate::segment::Segmenter;
 use crate::source::{FrameSource, SourceError};
 
 use super::{ClothFrame, ClothStage, ClothStatus, GarmentChoice, Overlays, PoseOverlay, RenderStage};
@@ -116,15 +119,17 @@ pub struct RunSummary {
     pub seconds: f64,
 }
 
-/// The pose stage: the suit's pose pipeline plus temporal smoothing and joint limits.
+/// The pose stage: the suit's pose pipeline plus temporal smoothing and joint limits, and
+/// optionally a segmenter of its own that [`run`] puts on a separate thread.
 pub struct PoseStage {
     pub pipeline: PosePipeline,
     pub filter: Option<PoseFilter>,
+    pub segmenter: Option<Segmenter>,
 }
 
 impl PoseStage {
-    fn process(&mut self, image: &RgbImage, camera: &Camera, time_s: f64) -> PoseFrame {
-        let mut pose = self.pipeline.process(image, camera, None);
+    fn process(&mut self, image: &RgbImage, mask: Option<&Mask>, camera: &Camera, time_s: f64) -> PoseFrame {
+        let mut pose = self.pipeline.process(image, camera, mask);
         if let Some(filter) = &mut self.filter {
             if pose.person {
                 filter.apply(time_s, &mut pose.frame);
@@ -150,6 +155,12 @@ struct Captured {
     started: Instant,
 }
 
+struct Segmented {
+    captured: Captured,
+    mask: Option<Mask>,
+    segment_ms: f64,
+}
+
 struct Posed {
     captured: Captured,
     pose: PoseFrame,
@@ -161,7 +172,8 @@ struct Dressed {
     cloth_error: Option<String>,
 }
 
-const QUEUE_FRAMES: usize = 2;
+/// Items a queue holds besides the one each stage is working on.
+const QUEUE_FRAMES: usize = 1;
 
 /// Runs the pipeline until the source ends, fails, or is stopped. `open_source` runs on the capture
 /// thread (camera handles need not be `Send`); `banner` gives the sink-independent lines drawn on
@@ -183,6 +195,7 @@ pub fn run(
         InputKind::Recorded => Full::Wait,
     };
     let captured: StageQueue<Captured> = StageQueue::new(QUEUE_FRAMES, policy);
+    let segmented: StageQueue<Segmented> = StageQueue::new(QUEUE_FRAMES, Full::Wait);
     let posed: StageQueue<Posed> = StageQueue::new(QUEUE_FRAMES, Full::Wait);
     let dressed: StageQueue<Dressed> = StageQueue::new(QUEUE_FRAMES, Full::Wait);
     let finished: StageQueue<Output> = StageQueue::new(QUEUE_FRAMES, Full::Wait);
@@ -196,11 +209,42 @@ pub fn run(
             scope.spawn(move || capture_frames(open_source, &queue, &controls))
         };
         {
-            let (input, output) = (captured.clone(), posed.clone());
-            let camera = camera;
+            // Segmentation on its own thread when the pose stage brought a segmenter.
+            let (input, output) = (captured.clone(), segmented.clone());
+            let mut segmenter = pose_stage.segmenter.take();
             scope.spawn(move || {
                 while let Some(captured) = input.pop() {
-                    let pose = pose_stage.process(&captured.image, &camera, captured.timestamp_s);
+                    let started = Instant::now();
+                    let mask = segmenter.as_mut().map(|s| s.segment(&captured.image).mask);
+                    let segment_ms = started.elapsed().as_secs_f64() * 1e3;
+                    let item = Segmented {
+                        captured,
+                        mask,
+                        segment_ms,
+                    };
+                    if output.push(item).is_err() {
+                        break;
+                    }
+                }
+                input.close();
+                output.close();
+            });
+        }
+        {
+            let (input, output) = (segmented.clone(), posed.clone());
+            let camera = camera;
+            scope.spawn(move || {
+                while let Some(Segmented {
+                    captured,
+                    mask,
+                    segment_ms,
+                }) = input.pop()
+                {
+                    let time = captured.timestamp_s;
+                    let mut pose = pose_stage.process(&captured.image, mask.as_ref(), &camera, time);
+                    if mask.is_some() {
+                        pose.times.segment = segment_ms;
+                    }
                     if output.push(Posed { captured, pose }).is_err() {
                         break;
                     }
