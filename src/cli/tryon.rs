@@ -550,8 +550,11 @@ pub fn drape(
         .and_then(|p| suitcap::dataset::Manifest::load(&p).ok())
     {
         println!(
-            "  ground truth (generator's subject {}): height {:.1} cm, girth {:.2}",
-            truth.subject.name, truth.subject.height_cm, truth.subject.girth
+            "  ground truth (generator's subject {}, nominal height {:.1} cm): the motion's own skeleton (scale 1.000, standing {:.1} cm with its limb ratios), girth {:.2}",
+            truth.subject.name,
+            truth.subject.height_cm,
+            suitcap::body_size::skeleton_height_cm(&template),
+            truth.subject.girth
         );
     }
     if garment.garment.eq_ignore_ascii_case("none") {

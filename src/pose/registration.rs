@@ -1,16 +1,16 @@
 //! Silhouette registration of the root: the posed template body moved in the image plane until its
-//! projection sits on the person's silhouette.
+//! projection overlaps the person's silhouette best.
 //!
 //! The regressed root offset and the head/hand/shoe correction ([`super::correction`]) leave the body
 //! several centimetres off in the image, which the pose angles do not care about but a garment drawn
-//! over the video does. Here the template body, posed by the frame, is rasterized at a reduced
-//! resolution ([`BodyMasker`]), and the root is moved parallel to the image plane by the difference of
-//! the two masks' centroids (pixels × depth / focal length), twice (the second pass takes up what the
-//! first one's change of occlusion and perspective moved). Depth is left alone: in one view it
-//! trades off against the person's size, which the marker pitch fixes and
-//! [`crate::body_size`] measures. Hands on hips or a leg kicked out change both masks alike, so the
-//! centroids stay comparable when the pose is right; when the mask is empty or the model projects
-//! off the image nothing moves.
+//! over the video does. Here the suit-covered parts of the template body (the segmenter finds the
+//! suit, not the skin or shoes), posed by the frame, are rasterized at a quarter of the resolution
+//! ([`BodyMasker`]), and the integer shift within ±15 % of the image width that puts most model
+//! pixels on the (block-reduced) silhouette is found coarse to fine; the root moves parallel to the
+//! image plane by that shift × depth / focal length. Overlap, unlike aligning centroids, is not
+//! dragged by a segmentation leak or by legs leaving the picture: a leak adds the same pixels to
+//! every candidate shift that does not reach it. Depth is left alone: in one view it trades off
+//! against the person's size, which the marker pitch fixes and [`crate::body_size`] measures.
 
 use glam::{Affine3A, Vec2, Vec3};
 
@@ -21,14 +21,8 @@ use crate::mask::Mask;
 use crate::raster::DepthBuffer;
 use crate::skeleton::Skeleton;
 
-/// Passes of the centroid alignment.
-const PASSES: usize = 2;
-
-/// The silhouette counts within the model's bounding box grown by this share of its height.
-const WINDOW_MARGIN: f32 = 0.15;
-
-/// A shift larger than this share of the image width is taken for a wrong pose, not an offset.
-const MAX_SHIFT_FRACTION: f32 = 0.25;
+/// The search reaches this share of the image width in every direction.
+const MAX_SHIFT_FRACTION: f32 = 0.15;
 
 /// The registration of one stream: the template body's meshes and scratch buffers.
 #[derive(Clone, Debug)]
@@ -41,9 +35,11 @@ pub struct Registration {
 }
 
 impl Registration {
+    /// A registration against the segmenter's masks: only the suit-covered parts of `body` count
+    /// (the segmenter misses the head, hands and shoes, which would pull the body off centre).
     pub fn new(body: &Body) -> Registration {
         Registration {
-            masker: BodyMasker::new(body),
+            masker: BodyMasker::suit_only(body),
             depth: DepthBuffer::new(1, 1),
             world: Vec::new(),
             downscale: 4,
@@ -51,8 +47,8 @@ impl Registration {
     }
 
     /// Moves the root (`root_position`: the frame's X, Y, Z position channels, world cm) of `frame`
-    /// on `skeleton` so the body's projection is centred on `silhouette`. Returns the total image
-    /// shift applied (full-resolution pixels), or `None` when nothing could be measured.
+    /// on `skeleton` so the body's projection overlaps `silhouette` best. Returns the image shift
+    /// applied (full-resolution pixels), or `None` when nothing could be measured.
     pub fn register(
         &mut self,
         skeleton: &Skeleton,
@@ -61,56 +57,98 @@ impl Registration {
         silhouette: &Mask,
         camera: &Camera,
     ) -> Option<Vec2> {
-        if root_position.iter().any(|&c| c >= frame.len()) {
-            return None;
-        }
-        if silhouette.is_empty() {
+        if root_position.iter().any(|&c| c >= frame.len()) || silhouette.is_empty() {
             return None;
         }
         let small = downscaled(camera, self.downscale);
         let factor = self.downscale as f32;
-        let mut total = Vec2::ZERO;
-        for _ in 0..PASSES {
-            skeleton.forward_kinematics(frame, &mut self.world);
-            let model = self.masker.mask(&self.world, &small, &mut self.depth);
-            let (Some(model_centre), Some(model_box)) = (centroid(&model), model.bounding_box())
-            else {
-                break;
-            };
-            // Only the silhouette near the model counts, so a segmentation leak elsewhere in the
-            // picture does not pull the body away from the person.
-            let margin = WINDOW_MARGIN * (model_box.3 - model_box.1) as f32;
-            let window = [
-                model_box.0 as f32 - margin,
-                model_box.1 as f32 - margin,
-                model_box.2 as f32 + margin,
-                model_box.3 as f32 + margin,
-            ]
-            .map(|v| v * factor);
-            let Some(target) = centroid_within(silhouette, window) else {
-                break;
-            };
-            // Pixel centres: a low-resolution pixel i covers full-resolution [f·i, f·(i+1)).
-            let shift = target - model_centre * factor;
-            if shift.length() > MAX_SHIFT_FRACTION * camera.intrinsics.width as f32 {
-                return None;
-            }
-            let root = Vec3::new(frame[root_position[0]], frame[root_position[1]], frame[root_position[2]]);
-            let root_world = self.world.first().map_or(root, |t| Vec3::from(t.translation));
-            let depth = camera.to_camera(root_world).z;
-            if !(depth > 1.0) {
-                return None;
-            }
-            let k = &camera.intrinsics;
-            let in_camera = Vec3::new(shift.x * depth / k.fx, shift.y * depth / k.fy, 0.0);
-            let in_world = camera.rotation.transpose() * in_camera;
-            for (axis, &c) in root_position.iter().enumerate() {
-                frame[c] += in_world[axis];
-            }
-            total += shift;
+        skeleton.forward_kinematics(frame, &mut self.world);
+        let model = self.masker.mask(&self.world, &small, &mut self.depth);
+        let target = block_mask(silhouette, self.downscale, small.intrinsics.width, small.intrinsics.height);
+        let reach = (MAX_SHIFT_FRACTION * small.intrinsics.width as f32) as i32;
+        let (dx, dy) = best_overlap(&model, &target, reach)?;
+        let shift = Vec2::new(dx as f32, dy as f32) * factor;
+        let root_world = self.world.first().map(|t| Vec3::from(t.translation))?;
+        let depth = camera.to_camera(root_world).z;
+        if !(depth > 1.0) {
+            return None;
         }
-        (total != Vec2::ZERO).then_some(total)
+        let k = &camera.intrinsics;
+        let in_camera = Vec3::new(shift.x * depth / k.fx, shift.y * depth / k.fy, 0.0);
+        let in_world = camera.rotation.transpose() * in_camera;
+        for (axis, &c) in root_position.iter().enumerate() {
+            frame[c] += in_world[axis];
+        }
+        Some(shift)
     }
+}
+
+/// `mask` at `1/factor` resolution (`width × height`): a cell is person when at least half of its
+/// block is.
+pub fn block_mask(mask: &Mask, factor: u32, width: u32, height: u32) -> Mask {
+    let f = factor.max(1) as usize;
+    let (w, h) = (mask.width() as usize, mask.height() as usize);
+    let mut counts = vec![0u32; width as usize * height as usize];
+    for (y, row) in mask.pixels().chunks(w.max(1)).enumerate() {
+        let cy = (y / f).min(height as usize - 1);
+        for (x, _) in row.iter().enumerate().filter(|(_, &p)| p) {
+            counts[cy * width as usize + (x / f).min(width as usize - 1)] += 1;
+        }
+    }
+    let half = ((f * f) as u32).div_ceil(2);
+    let _ = h;
+    let pixels = counts.iter().map(|&c| c >= half).collect();
+    Mask::from_pixels(width, height, pixels).unwrap_or_else(|| Mask::empty(width, height))
+}
+
+/// The integer shift (within ±`reach` cells) that puts most of `model`'s pixels on `target`
+/// (same size), searched coarse to fine; ties go to the smaller shift. `None` when no shift
+/// overlaps at all.
+pub fn best_overlap(model: &Mask, target: &Mask, reach: i32) -> Option<(i32, i32)> {
+    let width = model.width() as i32;
+    let height = model.height() as i32;
+    let points: Vec<(i32, i32)> = model
+        .pixels()
+        .iter()
+        .enumerate()
+        .filter(|(_, &p)| p)
+        .map(|(i, _)| (i as i32 % width, i as i32 / width))
+        .collect();
+    if points.is_empty() {
+        return None;
+    }
+    let hits = |dx: i32, dy: i32| -> i64 {
+        points
+            .iter()
+            .filter(|&&(x, y)| {
+                let (tx, ty) = (x + dx, y + dy);
+                tx >= 0 && ty >= 0 && tx < width && ty < height && target.get(tx as u32, ty as u32)
+            })
+            .count() as i64
+    };
+    let better = |a: (i64, i32, i32), b: (i64, i32, i32)| {
+        a.0 > b.0 || (a.0 == b.0 && a.1 * a.1 + a.2 * a.2 < b.1 * b.1 + b.2 * b.2)
+    };
+    let mut best = (hits(0, 0), 0, 0);
+    let coarse = 2;
+    for dy in (-reach..=reach).step_by(coarse as usize) {
+        for dx in (-reach..=reach).step_by(coarse as usize) {
+            let candidate = (hits(dx, dy), dx, dy);
+            if better(candidate, best) {
+                best = candidate;
+            }
+        }
+    }
+    let (_, cx, cy) = best;
+    for dy in cy - 1..=cy + 1 {
+        for dx in cx - 1..=cx + 1 {
+            let candidate = (hits(dx, dy), dx, dy);
+            if better(candidate, best) {
+                best = candidate;
+            }
+        }
+    }
+    (best.0 > 0).then_some((best.1, best.2))
 }
 
 /// The camera with its image scaled down by `factor` (intrinsics divided, extrinsics unchanged).
@@ -199,7 +237,7 @@ mod tests {
         let mut world = Vec::new();
         skeleton.forward_kinematics(&truth, &mut world);
         let mut depth = DepthBuffer::new(320, 240);
-        let silhouette = BodyMasker::new(&body).mask(&world, &camera, &mut depth);
+        let silhouette = BodyMasker::suit_only(&body).mask(&world, &camera, &mut depth);
         let mut frame = truth.clone();
         frame[root_position[0]] += 12.0; // camera x is world x here
         let mut registration = Registration::new(&body);

@@ -626,6 +626,8 @@ fn evaluate(
     .collect();
     // Root position error sums (cm) before and after the position correction, frames, corrected frames.
     let mut root = (0.0f64, 0.0f64, 0usize, 0usize);
+    // Root reprojection error (pixels) before and after: what decides where a garment is drawn.
+    let mut root_pixels = (0.0f64, 0.0f64, 0usize);
     for dir in data {
         let dataset = Dataset::open(dir)?;
         let layout =
@@ -671,6 +673,16 @@ fn evaluate(
                 + pipeline.regressor.skeleton.skeleton.joint(0).offset;
             root.0 += before.distance(truth_root) as f64;
             root.1 += after.distance(truth_root) as f64;
+            let camera = &dataset.camera;
+            if let (Some(t), Some(b), Some(a)) = (
+                camera.project(truth_root),
+                camera.project(before),
+                camera.project(after),
+            ) {
+                root_pixels.0 += b.pixel.distance(t.pixel) as f64;
+                root_pixels.1 += a.pixel.distance(t.pixel) as f64;
+                root_pixels.2 += 1;
+            }
             root.2 += 1;
             root.3 += result.correction.is_some() as usize;
         }
@@ -709,9 +721,16 @@ fn evaluate(
             );
         }
     }
+    if verbose && root_pixels.2 > 0 {
+        println!(
+            "root in the image: {:.1} px from the regressor alone, {:.1} px after the correction and registration",
+            root_pixels.0 / root_pixels.2 as f64,
+            root_pixels.1 / root_pixels.2 as f64
+        );
+    }
     if verbose && root.2 > 0 {
         println!(
-            "root position error: {:.1} cm from the regressor alone, {:.1} cm after the position correction (head, hands and shoes by colour; {} of {} frames corrected)",
+            "root position error: {:.1} cm from the regressor alone, {:.1} cm after the position correction (depth from the marker pitch, head, hands and shoes by colour; {} of {} frames corrected) and the silhouette registration",
             root.0 / root.2 as f64,
             root.1 / root.2 as f64,
             root.3,
