@@ -139,7 +139,7 @@ impl PreparedCapsule {
         let b = Vec3A::from(capsule.b);
         let (ra, rb) = (capsule.radius_a, capsule.radius_b);
         let length = (b - a).length();
-        let sphere = if !(length > 1e-6) || (ra - rb).abs() >= length {
+        let sphere = if length.is_nan() || length <= 1e-6 || (ra - rb).abs() >= length {
             Some(if ra >= rb { (a, ra) } else { (b, rb) })
         } else {
             None
@@ -280,10 +280,7 @@ mod tests {
     #[test]
     fn taper_in_the_other_direction_is_the_mirror_image() {
         let c = Capsule::new(Vec3::ZERO, Vec3::new(10.0, 0.0, 0.0), 1.0, 3.0);
-        assert!(close(
-            c.signed_distance(Vec3::new(5.0, 5.0, 0.0)),
-            2.898979
-        ));
+        assert!(close(c.signed_distance(Vec3::new(5.0, 5.0, 0.0)), 2.898979));
         assert!(close(c.signed_distance(Vec3::new(-5.0, 0.0, 0.0)), 4.0));
     }
 

@@ -29,9 +29,12 @@
 //! the whole mesh. Finally every vertex still closer than half the ease to a capsule (a disc between
 //! fitted directions, a sleeve over the arm) is pushed out to that distance.
 //!
-//! **Anchors** are vertices bound rigidly to a bone (bone index, position in the bone's frame at
-//! rest): for the T-shirt the neckline loop and its neighbours (chest bone), for the skirt the
-//! waistband's two top rings (hip bone), for the dress its waist ring (hip) and neckline (chest).
+//! **Anchors** are vertices bound to a bone (bone index, position in the bone's frame at rest):
+//! for the T-shirt the neckline loop and its neighbours up to the neck joint's height (chest bone;
+//! the head tilting forward reaches the strap tops beside the neck), for the skirt the waistband's
+//! two top rings (hip bone), for the dress its neckline (chest) rigidly and its waist ring to the
+//! hip loosely (within [`DRESS_WAIST_SLACK_CM`]: bending the spine lengthens the back between the
+//! two bones by a few centimetres, which two rigid rings would force into the bodice as stretch).
 //!
 //! Hands to the solver: a [`GarmentMesh`] — rest positions in world centimetres, triangles, anchors.
 
@@ -44,7 +47,8 @@ use super::capsule::{Capsule, PreparedCapsule};
 use super::proxies::{BodyPose, BodyRig};
 use super::topology::{boundary_loops, unique_edges, Adjacency};
 
-/// A vertex bound rigidly to a bone.
+/// A vertex bound to a bone: rigidly (`slack_cm` 0, the vertex is kinematic) or loosely (the
+/// vertex is simulated but kept within `slack_cm` of its bound position).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Anchor {
     pub vertex: u32,
@@ -52,6 +56,8 @@ pub struct Anchor {
     pub bone: usize,
     /// Position in the bone's local frame (its rest position mapped through the bone's rest inverse).
     pub local: Vec3,
+    /// How far the vertex may stray from its bound position, cm (0: rigid).
+    pub slack_cm: f32,
 }
 
 /// A garment's rest shape: positions in rest-pose world centimetres, outward-wound triangles, anchors.
@@ -89,7 +95,10 @@ impl FromStr for GarmentKind {
     fn from_str(s: &str) -> Result<GarmentKind, GarmentError> {
         GarmentKind::ALL
             .into_iter()
-            .find(|k| k.name().eq_ignore_ascii_case(s) || (s.eq_ignore_ascii_case("t-shirt") && *k == GarmentKind::TShirt))
+            .find(|k| {
+                k.name().eq_ignore_ascii_case(s)
+                    || (s.eq_ignore_ascii_case("t-shirt") && *k == GarmentKind::TShirt)
+            })
             .ok_or_else(|| GarmentError::UnknownKind(s.to_owned()))
     }
 }
@@ -217,9 +226,7 @@ impl GarmentMesh {
         for r in 0..=rows {
             for c in 0..=columns {
                 positions.push(
-                    corner
-                        + along * (c as f32 / columns as f32)
-                        + down * (r as f32 / rows as f32),
+                    corner + along * (c as f32 / columns as f32) + down * (r as f32 / rows as f32),
                 );
             }
         }
@@ -275,7 +282,11 @@ impl GarmentMesh {
             }
         }
         for a in &self.anchors {
-            if a.vertex as usize >= n || !a.local.is_finite() {
+            if a.vertex as usize >= n
+                || !a.local.is_finite()
+                || a.slack_cm.is_nan()
+                || a.slack_cm < 0.0
+            {
                 return Err(invalid(format!("anchor {a:?} is invalid")));
             }
         }
@@ -423,7 +434,11 @@ fn ellipse_ring(y: f32, zc: f32, semi: Vec2, n: usize) -> Vec<Vec3> {
             let target = total * k as f32 / n as f32;
             let i = table.partition_point(|&a| a < target).clamp(1, STEPS);
             let (a0, a1) = (table[i - 1], table[i]);
-            let frac = if a1 > a0 { (target - a0) / (a1 - a0) } else { 0.0 };
+            let frac = if a1 > a0 {
+                (target - a0) / (a1 - a0)
+            } else {
+                0.0
+            };
             let theta = (i as f32 - 1.0 + frac) * step;
             Vec3::new(semi.x * theta.cos(), y, zc + semi.y * theta.sin())
         })
@@ -462,10 +477,31 @@ impl Builder {
     /// (vertex k of an n-ring sits at k/n). Both rings run in the same sense (right, seen from
     /// outside).
     fn loft(&mut self, lower: &[u32], upper: &[u32], upper_first: bool) {
+        let even = |n: usize| (0..n).map(|k| k as f64 / n as f64).collect::<Vec<_>>();
+        self.loft_at(
+            lower,
+            &even(lower.len()),
+            upper,
+            &even(upper.len()),
+            upper_first,
+        );
+    }
+
+    /// [`Builder::loft`] with each vertex's fraction of the way around given (increasing from 0).
+    /// Triangles run the lower ring backwards (k + 1 → k) and the upper ring forwards.
+    fn loft_at(
+        &mut self,
+        lower: &[u32],
+        lower_at: &[f64],
+        upper: &[u32],
+        upper_at: &[f64],
+        upper_first: bool,
+    ) {
         let (nl, nu) = (lower.len(), upper.len());
-        if nl == 0 || nu == 0 {
+        if nl == 0 || nu == 0 || lower_at.len() != nl || upper_at.len() != nu {
             return;
         }
+        let next = |at: &[f64], k: usize| at.get(k + 1).copied().unwrap_or(1.0);
         let (mut k, mut j) = (0usize, 0usize);
         while k < nl || j < nu {
             let advance_lower = if k == nl {
@@ -473,7 +509,7 @@ impl Builder {
             } else if j == nu {
                 true
             } else {
-                match ((k + 1) * nu).cmp(&((j + 1) * nl)) {
+                match next(lower_at, k).total_cmp(&next(upper_at, j)) {
                     std::cmp::Ordering::Less => true,
                     std::cmp::Ordering::Greater => false,
                     std::cmp::Ordering::Equal => !upper_first,
@@ -519,7 +555,9 @@ fn build_bodice(
 ) -> Result<Bodice, GarmentError> {
     let n = spec.n;
     let top = spec.rings.len() - 1;
-    let shoulder = rest.joint_position("rShldr")?.lerp(rest.joint_position("lShldr")?, 0.5);
+    let shoulder = rest
+        .joint_position("rShldr")?
+        .lerp(rest.joint_position("lShldr")?, 0.5);
     let arm = rest.capsules_of(&["right_upper_arm"])?;
     let arm_radius = arm.first().map_or(6.0, |c| c.radius_a);
     let neck = rest.capsules_of(&["neck"])?;
@@ -563,9 +601,7 @@ fn build_bodice(
     // Straps: front column k (0 < k < n/2) to its mirror n − k over the shoulder.
     let strap_columns: Vec<usize> = (1..n / 2)
         .filter(|&k| {
-            grid[top][k].is_some()
-                && grid[top][n - k].is_some()
-                && top_ring[k].x.abs() >= neck_half
+            grid[top][k].is_some() && grid[top][n - k].is_some() && top_ring[k].x.abs() >= neck_half
         })
         .collect();
     if strap_columns.is_empty() {
@@ -690,7 +726,11 @@ fn resample(points: &[Vec3], segments: usize) -> Vec<Vec3> {
 }
 
 /// A short sleeve welded to an armhole loop (the loop runs as the bodice's triangles run it).
-#[allow(clippy::too_many_arguments)]
+///
+/// Rings of evenly spaced vertices, sampled at even arc-length fractions of the armhole loop so they
+/// do not inherit its uneven spacing: the first halfway between the loop and a circle around the
+/// arm, the rest circles tapering to the arm's radius plus the ease, ending about half-way down the
+/// upper arm. The loop is stitched to the first ring by arc-length fraction.
 fn build_sleeve(
     b: &mut Builder,
     armhole: &[u32],
@@ -701,17 +741,33 @@ fn build_sleeve(
 ) {
     let d = (elbow - shoulder).normalize_or(Vec3::X);
     let upper_arm = elbow.distance(shoulder);
+    let l = armhole.len();
+    if l < 3 {
+        return;
+    }
     let loop_points: Vec<Vec3> = armhole.iter().map(|&v| b.positions[v as usize]).collect();
-    let axial: Vec<f32> = loop_points.iter().map(|p| (*p - shoulder).dot(d)).collect();
-    let radial: Vec<Vec3> = loop_points
+    // Arc-length fraction of each loop vertex.
+    let mut along_loop = Vec::with_capacity(l + 1);
+    along_loop.push(0.0f64);
+    for m in 0..l {
+        let step = loop_points[m].distance(loop_points[(m + 1) % l]) as f64;
+        along_loop.push(along_loop[m] + step);
+    }
+    let perimeter = along_loop[l].max(1e-6);
+    let loop_at: Vec<f64> = along_loop[..l].iter().map(|a| a / perimeter).collect();
+    let axial_of = |p: Vec3| (p - shoulder).dot(d);
+    let radial_of = |p: Vec3| p - shoulder - d * axial_of(p);
+    let count = l as f32;
+    let centre = loop_points.iter().map(|&p| radial_of(p)).sum::<Vec3>() / count;
+    let mean_radius = loop_points
         .iter()
-        .zip(&axial)
-        .map(|(p, a)| *p - shoulder - d * *a)
-        .collect();
-    let count = radial.len().max(1) as f32;
-    let centre = radial.iter().copied().sum::<Vec3>() / count;
-    let mean_radius = radial.iter().map(|r| r.distance(centre)).sum::<f32>() / count;
-    let start = axial.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        .map(|&p| radial_of(p).distance(centre))
+        .sum::<f32>()
+        / count;
+    let start = loop_points
+        .iter()
+        .map(|&p| axial_of(p))
+        .fold(f32::NEG_INFINITY, f32::max);
     let end = (0.55 * upper_arm).max(start + 2.0 * params.edge_cm);
     let rings = (((end - start) / params.edge_cm).round() as usize).max(2);
     let arm_at = |a: f32| {
@@ -719,33 +775,37 @@ fn build_sleeve(
         arm.radius_a + (arm.radius_b - arm.radius_a) * t
     };
     let end_radius = arm_at(end) + params.ease_cm;
+    let around = ((std::f32::consts::TAU * 0.5 * (mean_radius + end_radius) / params.edge_cm)
+        .round() as usize)
+        .max(8);
+    // Loop samples at even fractions.
+    let samples: Vec<Vec3> = (0..around)
+        .map(|k| {
+            let target = perimeter * k as f64 / around as f64;
+            let m = along_loop.partition_point(|&a| a <= target).clamp(1, l) - 1;
+            let span = (along_loop[m + 1] - along_loop[m]).max(1e-9);
+            let t = ((target - along_loop[m]) / span) as f32;
+            loop_points[m].lerp(loop_points[(m + 1) % l], t)
+        })
+        .collect();
+    let ring_at: Vec<f64> = (0..around).map(|k| k as f64 / around as f64).collect();
     let mut previous: Vec<u32> = armhole.to_vec();
+    let mut previous_at = loop_at;
     for j in 1..=rings {
         let f = (j as f32 / 2.0).min(1.0);
         let along = start + (end - start) * j as f32 / rings as f32;
         let radius = mean_radius + (end_radius - mean_radius) * j as f32 / rings as f32;
-        let ring: Vec<u32> = (0..armhole.len())
-            .map(|m| {
-                let dir = (radial[m] - centre).normalize_or(d.any_orthonormal_vector());
-                let a = axial[m] + (along - axial[m]) * f;
-                let r = radial[m].lerp(dir * radius, f);
-                b.vertex(shoulder + d * a + r)
+        let ring: Vec<u32> = samples
+            .iter()
+            .map(|&q| {
+                let (a, r) = (axial_of(q), radial_of(q));
+                let dir = (r - centre).normalize_or(d.any_orthonormal_vector());
+                b.vertex(shoulder + d * (a + (along - a) * f) + r.lerp(dir * radius, f))
             })
             .collect();
-        let l = armhole.len();
-        for m in 0..l {
-            let m1 = (m + 1) % l;
-            let (a, bb, c, dd) = (previous[m], previous[m1], ring[m1], ring[m]);
-            // The bodice runs a → bb; the sleeve must run bb → a.
-            if (j + m) % 2 == 0 {
-                b.triangles.push([a, c, bb]);
-                b.triangles.push([a, dd, c]);
-            } else {
-                b.triangles.push([a, dd, bb]);
-                b.triangles.push([bb, dd, c]);
-            }
-        }
+        b.loft_at(&previous, &previous_at, &ring, &ring_at, j % 2 == 0);
         previous = ring;
+        previous_at = ring_at.clone();
     }
 }
 
@@ -814,7 +874,9 @@ fn bodice_spec(
     bottom: f32,
     hang_straight: bool,
 ) -> Result<BodiceSpec, GarmentError> {
-    let shoulder = rest.joint_position("rShldr")?.lerp(rest.joint_position("lShldr")?, 0.5);
+    let shoulder = rest
+        .joint_position("rShldr")?
+        .lerp(rest.joint_position("lShldr")?, 0.5);
     let arm_radius = rest
         .capsules_of(&["right_upper_arm"])?
         .first()
@@ -852,7 +914,8 @@ fn find_loop(b: &Builder, loops: &[Vec<u32>], score: impl Fn(Vec3) -> f32) -> Op
     loops
         .iter()
         .map(|l| {
-            let c = l.iter().map(|&v| b.positions[v as usize]).sum::<Vec3>() / l.len().max(1) as f32;
+            let c =
+                l.iter().map(|&v| b.positions[v as usize]).sum::<Vec3>() / l.len().max(1) as f32;
             (score(c), l)
         })
         .min_by(|a, b| a.0.total_cmp(&b.0))
@@ -868,15 +931,17 @@ fn neckline_anchors(
 ) -> Result<Vec<Anchor>, GarmentError> {
     let loops = boundary_loops(&b.triangles);
     let neck_half = bodice.neck_half;
-    let neck = find_loop(b, &loops, |c| c.x.abs() + (c.y - top_y).min(0.0).abs() * 2.0)
-        .filter(|l| {
-            l.iter()
-                .all(|&v| b.positions[v as usize].x.abs() <= neck_half + bodice.x_cut)
-        })
-        .ok_or_else(|| GarmentError::Invalid {
-            name: "neckline".into(),
-            message: "no neck hole found".into(),
-        })?;
+    let neck = find_loop(b, &loops, |c| {
+        c.x.abs() + (c.y - top_y).min(0.0).abs() * 2.0
+    })
+    .filter(|l| {
+        l.iter()
+            .all(|&v| b.positions[v as usize].x.abs() <= neck_half + bodice.x_cut)
+    })
+    .ok_or_else(|| GarmentError::Invalid {
+        name: "neckline".into(),
+        message: "no neck hole found".into(),
+    })?;
     let chest = rest.joint("chest")?;
     let mut vertices = neck.clone();
     if with_neighbours {
@@ -887,12 +952,17 @@ fn neckline_anchors(
     }
     vertices.sort_unstable();
     vertices.dedup();
+    // Not the tops of the straps beside the neck: the head, tilting forward, reaches down to them
+    // and would press into cloth that cannot give way.
+    let neck_y = rest.joint_position("neck")?.y;
+    vertices.retain(|&v| b.positions[v as usize].y <= neck_y);
     Ok(vertices
         .into_iter()
         .map(|v| Anchor {
             vertex: v,
             bone: chest,
             local: rest.bone_local(chest, b.positions[v as usize]),
+            slack_cm: 0.0,
         })
         .collect())
 }
@@ -916,7 +986,13 @@ fn push_out(rest: &Rest, positions: &mut [Vec3], clear: f32) {
     }
 }
 
-fn finish(rest: &Rest, name: &str, mut b: Builder, mut anchors: Vec<Anchor>, ease: f32) -> GarmentMesh {
+fn finish(
+    rest: &Rest,
+    name: &str,
+    mut b: Builder,
+    mut anchors: Vec<Anchor>,
+    ease: f32,
+) -> GarmentMesh {
     push_out(rest, &mut b.positions, 0.5 * ease);
     for a in &mut anchors {
         a.local = rest.bone_local(a.bone, b.positions[a.vertex as usize]);
@@ -952,10 +1028,7 @@ fn tshirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentErr
             .copied()
             .ok_or(GarmentError::MissingPart(part))?;
         let armhole = find_loop(&b, &loops, |c| -(c.x * side) + (c.y - shoulder.y).abs())
-            .filter(|l| {
-                l.iter()
-                    .all(|&v| b.positions[v as usize].x * side > 0.0)
-            })
+            .filter(|l| l.iter().all(|&v| b.positions[v as usize].x * side > 0.0))
             .ok_or_else(|| GarmentError::Invalid {
                 name: "tshirt".into(),
                 message: format!("no armhole found on the {shoulder_name} side"),
@@ -974,7 +1047,9 @@ fn skirt_rings(
     waist_semi: Option<Vec2>,
     zc: f32,
 ) -> Result<Vec<(f32, Vec2)>, GarmentError> {
-    let knee = rest.joint_position("rShin")?.lerp(rest.joint_position("lShin")?, 0.5);
+    let knee = rest
+        .joint_position("rShin")?
+        .lerp(rest.joint_position("lShin")?, 0.5);
     let hem = knee.y + 3.0;
     let legs = rest.capsules_of(&LEGS)?;
     let flare = 12f32.to_radians().tan();
@@ -1040,10 +1115,14 @@ fn skirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentErro
             vertex: v,
             bone: hip_bone,
             local: Vec3::ZERO,
+            slack_cm: 0.0,
         })
         .collect();
     Ok(finish(rest, "skirt", b, anchors, params.ease_cm))
 }
+
+/// How far the dress's waist may move from its place on the hip bone, cm.
+pub const DRESS_WAIST_SLACK_CM: f32 = 2.5;
 
 fn dress(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentError> {
     let abdomen = rest.joint_position("abdomen")?;
@@ -1057,10 +1136,14 @@ fn dress(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentErro
     let rings = skirt_rings(rest, params, waist_y, Some(spec.rings[0].1), spec.zc)?;
     build_skirt_rings(&mut b, waist.clone(), &rings, spec.zc, params.edge_cm);
     let hip_bone = rest.joint("hip")?;
+    // The waist follows the hip loosely: the neckline hangs from the chest, and the back of the
+    // bodice lengthens by a few centimetres whenever the spine flexes, which two rigid rings on
+    // different bones would have to take as stretch.
     anchors.extend(waist.iter().map(|&v| Anchor {
         vertex: v,
         bone: hip_bone,
         local: Vec3::ZERO,
+        slack_cm: DRESS_WAIST_SLACK_CM,
     }));
     Ok(finish(rest, "dress", b, anchors, params.ease_cm))
 }
@@ -1087,7 +1170,8 @@ pub(crate) mod tests {
     use std::path::Path;
 
     pub fn chidi() -> BodyRig {
-        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        let clip =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
         let motion = crate::bvh::Motion::load(&clip).expect("clip");
         let subject = crate::body::Subject::find("chidi").expect("chidi");
         BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig")
@@ -1101,7 +1185,10 @@ pub(crate) mod tests {
         // Mirror columns k and n − k have the same x, opposite z about the centre.
         for k in 1..20 {
             let (f, b) = (ring[k], ring[40 - k]);
-            assert!((f.x - b.x).abs() < 2e-3 && (f.z - 1.0 + b.z - 1.0).abs() < 2e-3, "{k}");
+            assert!(
+                (f.x - b.x).abs() < 2e-3 && (f.z - 1.0 + b.z - 1.0).abs() < 2e-3,
+                "{k}"
+            );
         }
         let perimeter = ellipse_perimeter(Vec2::new(15.0, 10.0));
         for k in 0..40 {
@@ -1204,14 +1291,19 @@ pub(crate) mod tests {
     #[test]
     fn quality_mode_has_about_four_times_the_vertices() {
         let rig = chidi();
-        let live = GarmentMesh::generate(GarmentKind::Skirt, &rig, &GarmentParams::live()).expect("live");
-        let fine =
-            GarmentMesh::generate(GarmentKind::Skirt, &rig, &GarmentParams::quality()).expect("fine");
+        let live =
+            GarmentMesh::generate(GarmentKind::Skirt, &rig, &GarmentParams::live()).expect("live");
+        let fine = GarmentMesh::generate(GarmentKind::Skirt, &rig, &GarmentParams::quality())
+            .expect("fine");
         let ratio = fine.positions.len() as f32 / live.positions.len() as f32;
         assert!((3.4..4.6).contains(&ratio), "{ratio}");
         let (mesh, edge) =
             GarmentMesh::with_vertex_count(GarmentKind::TShirt, &rig, 3000, 2.5).expect("sized");
-        assert!(mesh.positions.len().abs_diff(3000) < 150, "{} at {edge}", mesh.positions.len());
+        assert!(
+            mesh.positions.len().abs_diff(3000) < 150,
+            "{} at {edge}",
+            mesh.positions.len()
+        );
         check_garment(&mesh, &rig);
     }
 
@@ -1228,97 +1320,5 @@ pub(crate) mod tests {
         );
         assert_eq!("Dress".parse::<GarmentKind>(), Ok(GarmentKind::Dress));
         assert!("cape".parse::<GarmentKind>().is_err());
-    }
-}
-#[cfg(test)]
-mod scratch2 {
-    use super::*;
-    #[test]
-    fn counts() {
-        let rig = super::tests::chidi();
-        for e in [2.2f32, 2.0, 1.9, 1.87, 1.8, 1.6, 1.4, 1.2, 1.0] {
-            for kind in GarmentKind::ALL {
-                let r = GarmentMesh::generate(kind, &rig, &GarmentParams { edge_cm: e, ease_cm: 2.5 });
-                println!("{e} {:?} {:?}", kind, r.map(|m| m.positions.len()));
-            }
-        }
-    }
-}
-#[cfg(test)]
-pub mod viz {
-    use super::*;
-    /// Orthographic views (front, side, top-ish) of triangles with flat shading, plus capsules.
-    pub fn render(path: &str, positions: &[Vec3], triangles: &[[u32; 3]], capsules: &[Capsule]) {
-        let (w, h) = (900u32, 600u32);
-        let mut img = image::RgbImage::new(w, h);
-        let mut depth = vec![f32::INFINITY; (w * h) as usize];
-        let views: [(Vec3, Vec3, Vec3, f32); 3] = [
-            (Vec3::X, Vec3::Y, Vec3::Z, 150.0),   // front: looking from +Z
-            (Vec3::Z, Vec3::Y, -Vec3::X, 450.0),   // side from -X... 
-            (-Vec3::X, Vec3::Y, -Vec3::Z, 750.0),  // back
-        ];
-        let centre = positions.iter().copied().sum::<Vec3>() / positions.len().max(1) as f32;
-        let scale = 2.6f32;
-        let mut draw = |tri: [Vec3; 3], colour: [f32; 3], depth: &mut Vec<f32>, img: &mut image::RgbImage| {
-            for (vi, (right, up, toward, cx)) in views.iter().enumerate() {
-                let _ = vi;
-                let proj = |p: Vec3| {
-                    let q = p - centre;
-                    (cx + q.dot(*right) * scale, 300.0 - q.dot(*up) * scale, -q.dot(*toward))
-                };
-                let [a, b, c] = tri.map(proj);
-                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
-                let facing = n.dot(*toward);
-                let light = (0.35 + 0.65 * facing.abs()).min(1.0);
-                let col = if facing >= 0.0 { colour } else { [colour[0] * 0.5, colour[1] * 0.5, colour[2] * 0.9] };
-                let minx = a.0.min(b.0).min(c.0).floor().max(0.0) as i32;
-                let maxx = a.0.max(b.0).max(c.0).ceil().min(w as f32 - 1.0) as i32;
-                let miny = a.1.min(b.1).min(c.1).floor().max(0.0) as i32;
-                let maxy = a.1.max(b.1).max(c.1).ceil().min(h as f32 - 1.0) as i32;
-                let area = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
-                if area.abs() < 1e-6 { continue; }
-                for y in miny..=maxy {
-                    for x in minx..=maxx {
-                        let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
-                        let w0 = ((b.0 - px) * (c.1 - py) - (b.1 - py) * (c.0 - px)) / area;
-                        let w1 = ((c.0 - px) * (a.1 - py) - (c.1 - py) * (a.0 - px)) / area;
-                        let w2 = 1.0 - w0 - w1;
-                        if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 { continue; }
-                        let z = w0 * a.2 + w1 * b.2 + w2 * c.2;
-                        let idx = (y as u32 * w + x as u32) as usize;
-                        if z < depth[idx] {
-                            depth[idx] = z;
-                            img.put_pixel(x as u32, y as u32, image::Rgb(col.map(|v| (v * light * 255.0) as u8)));
-                        }
-                    }
-                }
-            }
-        };
-        for c in capsules {
-            let part = crate::body::BodyPart {
-                name: "c", joint: 0, start: c.a, end: c.b,
-                radii_start: Vec2::splat(c.radius_a), radii_end: Vec2::splat(c.radius_b),
-                width_axis: (c.b - c.a).normalize_or(Vec3::Y).any_orthonormal_vector(), cap: 1.0,
-                material: crate::body::Material::Skin, surface: 0,
-            };
-            let m = part.mesh(16, 4.0);
-            for t in &m.triangles {
-                draw(t.map(|i| m.vertices[i as usize].position), [0.5, 0.45, 0.4], &mut depth, &mut img);
-            }
-        }
-        for t in triangles {
-            draw(t.map(|i| positions[i as usize]), [0.3, 0.6, 1.0], &mut depth, &mut img);
-        }
-        img.save(path).expect("save");
-    }
-
-    #[test]
-    fn draw_garments() {
-        let rig = super::tests::chidi();
-        let rest = Rest::new(&rig);
-        for kind in GarmentKind::ALL {
-            let m = GarmentMesh::generate(kind, &rig, &GarmentParams::live()).unwrap();
-            render(&format!("/tmp/cloth_{}.png", kind.name()), &m.positions, &m.triangles, &rest.pose.capsules);
-        }
     }
 }

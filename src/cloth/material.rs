@@ -221,7 +221,10 @@ mod tests {
         // Chiffon falls at about 0.8 m/s, denim at about 2.4 m/s.
         assert!((Material::chiffon().terminal_speed() - 83.7).abs() < 0.5);
         assert!((Material::denim().terminal_speed() - 236.8).abs() < 0.5);
-        assert_eq!(Material::preset("Cotton-Jersey"), Some(Material::cotton_jersey()));
+        assert_eq!(
+            Material::preset("Cotton-Jersey"),
+            Some(Material::cotton_jersey())
+        );
         assert!(Material::preset("tweed").is_none());
     }
 }

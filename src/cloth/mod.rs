@@ -1,4 +1,24 @@
-//! Cloth: garments simulated on the posed body's collision capsules (work in progress).
+//! Cloth: garments simulated on the posed body's collision capsules.
+//!
+//! The stage between the pose (BVH channels per frame) and the renderer:
+//!
+//! ```text
+//! Body (elliptic capsules) ── proxies ──▶ round tapered capsules per joint, BodyRig
+//! BodyRig + rest pose ── garment / obj ──▶ GarmentMesh (rest positions, triangles, anchors)
+//! GarmentMesh + Material ── solver ──▶ Cloth: dress, then step_frame(prev, next) per frame
+//!                                       └─▶ positions, normals, triangles, posed capsules
+//! ```
+//!
+//! - [`capsule`]: tapered capsules, exact signed distance, closest point, bounds.
+//! - [`proxies`]: the body's parts as round capsules; [`proxies::BodyRig`] interpolates skeleton
+//!   frames and poses the capsules every substep.
+//! - [`material`]: fabric presets and their mapping to solver parameters.
+//! - [`garment`]: procedural T-shirt, skirt and dress sized from the body, with anchors.
+//! - [`obj`]: garments from OBJ files.
+//! - [`topology`]: edges, hinges, boundary loops of triangle meshes.
+//! - [`solver`]: the XPBD solver, quality figures, a whole-motion run for the command line.
+//!
+//! Units: centimetres, grams, seconds; world Y up; gravity −981 cm/s².
 
 pub mod capsule;
 pub mod garment;
@@ -9,26 +29,7 @@ pub mod solver;
 pub mod topology;
 
 pub use capsule::Capsule;
-
-#[cfg(test)]
-mod scratch {
-    use super::proxies::*;
-    use std::path::Path;
-    #[test]
-    fn dump_rest() {
-        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
-        let motion = crate::bvh::Motion::load(&clip).unwrap();
-        let subject = crate::body::Subject::find("chidi").unwrap();
-        let rig = BodyRig::for_subject(subject, &motion.skeleton, 0.5).unwrap();
-        let mut pose = BodyPose::default();
-        rig.pose(&rig.rest_frame(), &mut pose);
-        for (i, j) in rig.skeleton().joints().iter().enumerate() {
-            if j.name.contains("Thumb") || j.name.contains("Index") || j.name.contains("Mid") || j.name.contains("Ring") || j.name.contains("Pinky") { continue; }
-            println!("{i} {} {:?}", j.name, pose.bones[i].translation);
-        }
-        for (p, c) in rig.proxies().iter().zip(&pose.capsules) {
-            println!("{} a={:?} b={:?} ra={} rb={}", rig.body().parts[p.part].name, c.a, c.b, c.radius_a, c.radius_b);
-        }
-        println!("frame0 {:?}", &motion.frame(0)[..12]);
-    }
-}
+pub use garment::{Anchor, GarmentKind, GarmentMesh, GarmentParams};
+pub use material::Material;
+pub use proxies::{BodyPose, BodyRig};
+pub use solver::{Cloth, FrameQuality, QualitySummary, SolverSettings};

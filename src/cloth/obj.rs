@@ -11,7 +11,9 @@
 //!
 //! [`load_garment`] adds anchors, since an OBJ carries none: every vertex within
 //! [`DEFAULT_ANCHOR_BAND_CM`] of the mesh's highest point (the shoulders and neckline of a top, the
-//! waistband of a skirt) is bound to the joint of the rest-pose body capsule nearest to it. Hands to
+//! waistband of a skirt) is bound rigidly to one bone: the joint of the rest-pose trunk capsule
+//! (pelvis, abdomen, chest, neck, …; not the arms) nearest to most of those vertices. One bone,
+//! because anchors on two bones tear the cloth between them whenever the bones move apart. Hands to
 //! the solver: a [`GarmentMesh`].
 
 use std::path::{Path, PathBuf};
@@ -20,7 +22,7 @@ use glam::Vec3;
 
 use super::capsule::Capsule;
 use super::garment::{rest_pose, to_bone_local, Anchor, GarmentMesh};
-use super::proxies::BodyRig;
+use super::proxies::{BodyRig, GROUP_TRUNK};
 
 /// Vertices this close to the top of an OBJ garment become anchors, cm.
 pub const DEFAULT_ANCHOR_BAND_CM: f32 = 3.0;
@@ -85,9 +87,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<ObjMesh, ObjError> {
                         .parse::<f32>()
                         .ok()
                         .filter(|v| v.is_finite())
-                        .ok_or_else(|| {
-                            error(line, format!("'{token}' is not a finite number"))
-                        })?;
+                        .ok_or_else(|| error(line, format!("'{token}' is not a finite number")))?;
                 }
                 positions.push(Vec3::from(xyz));
             }
@@ -95,15 +95,18 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<ObjMesh, ObjError> {
                 corners.clear();
                 for token in tokens {
                     let index = token.split('/').next().unwrap_or("");
-                    let value: i64 = index.parse().map_err(|_| {
-                        error(line, format!("'{token}' is not a vertex reference"))
-                    })?;
+                    let value: i64 = index
+                        .parse()
+                        .map_err(|_| error(line, format!("'{token}' is not a vertex reference")))?;
                     let resolved = if value > 0 {
                         value - 1
                     } else if value < 0 {
                         positions.len() as i64 + value
                     } else {
-                        return Err(error(line, "vertex index 0 (OBJ indices start at 1)".into()));
+                        return Err(error(
+                            line,
+                            "vertex index 0 (OBJ indices start at 1)".into(),
+                        ));
                     };
                     if resolved < 0 || resolved > u32::MAX as i64 {
                         return Err(error(
@@ -119,7 +122,10 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<ObjMesh, ObjError> {
                 if corners.len() < 3 {
                     return Err(error(
                         line,
-                        format!("a face needs at least 3 vertices, this one has {}", corners.len()),
+                        format!(
+                            "a face needs at least 3 vertices, this one has {}",
+                            corners.len()
+                        ),
                     ));
                 }
                 for k in 1..corners.len() - 1 {
@@ -203,23 +209,38 @@ pub fn garment_from_mesh(name: String, mesh: ObjMesh, rig: &BodyRig, band_cm: f3
         .map(|p| p.y)
         .fold(f32::NEG_INFINITY, f32::max);
     let prepared: Vec<_> = pose.capsules.iter().map(Capsule::prepared).collect();
-    let anchors = mesh
-        .positions
+    let band: Vec<usize> = (0..mesh.positions.len())
+        .filter(|&v| mesh.positions[v].y >= top - band_cm.max(0.0))
+        .collect();
+    // One bone for the whole band: the joint of the trunk capsule nearest to most band vertices
+    // (anchors on two bones would tear the cloth between them whenever the bones move apart).
+    let mut votes: Vec<(usize, usize)> = Vec::new();
+    for &v in &band {
+        let p = mesh.positions[v];
+        let nearest = prepared
+            .iter()
+            .zip(rig.proxies())
+            .filter(|(_, proxy)| proxy.group == GROUP_TRUNK)
+            .map(|(c, proxy)| (c.distance(p.into()), proxy.joint))
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        if let Some((_, joint)) = nearest {
+            match votes.iter_mut().find(|(j, _)| *j == joint) {
+                Some(entry) => entry.1 += 1,
+                None => votes.push((joint, 1)),
+            }
+        }
+    }
+    let bone = votes
         .iter()
-        .enumerate()
-        .filter(|(_, p)| p.y >= top - band_cm.max(0.0))
-        .filter_map(|(v, p)| {
-            let nearest = prepared
-                .iter()
-                .enumerate()
-                .map(|(k, c)| (c.distance((*p).into()), k))
-                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))?;
-            let bone = rig.proxies()[nearest.1].joint;
-            Some(Anchor {
-                vertex: v as u32,
-                bone,
-                local: to_bone_local(&pose.bones, bone, *p),
-            })
+        .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))
+        .map_or(0, |(j, _)| *j);
+    let anchors = band
+        .into_iter()
+        .map(|v| Anchor {
+            vertex: v as u32,
+            bone,
+            local: to_bone_local(&pose.bones, bone, mesh.positions[v]),
+            slack_cm: 0.0,
         })
         .collect();
     GarmentMesh {
@@ -241,7 +262,8 @@ mod tests {
 
     #[test]
     fn reads_polygons_and_index_forms() {
-        let text = "# a quad and a triangle\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n\
+        let text =
+            "# a quad and a triangle\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n\
                     f 1/1/1 2/1/1 3//1 4\nv 2 0 0\nf -4 -1 -3\nv 9 9 9\n";
         let mesh = parse(text).expect("parse");
         assert_eq!(mesh.positions.len(), 5, "unused vertex dropped");
@@ -266,7 +288,9 @@ mod tests {
         assert!(e.to_string().contains("before the first vertex"), "{e}");
         assert!(matches!(parse("v 0 0 0\n"), Err(ObjError::NoFaces { .. })));
         let e = load_obj(Path::new("/nonexistent/shirt.obj")).expect_err("missing");
-        assert!(e.to_string().starts_with("/nonexistent/shirt.obj: cannot read"));
+        assert!(e
+            .to_string()
+            .starts_with("/nonexistent/shirt.obj: cannot read"));
     }
 
     #[test]
@@ -293,7 +317,11 @@ mod tests {
         assert_eq!(garment.triangles, skirt.triangles);
         // The waist ring (and the ring below it, 2 cm down) lie within the 3 cm band, on the hip
         // or abdomen.
-        let top = garment.positions.iter().map(|p| p.y).fold(f32::MIN, f32::max);
+        let top = garment
+            .positions
+            .iter()
+            .map(|p| p.y)
+            .fold(f32::MIN, f32::max);
         assert!(!garment.anchors.is_empty());
         for a in &garment.anchors {
             assert!(garment.positions[a.vertex as usize].y >= top - 3.0);

@@ -51,7 +51,10 @@ pub const GROUP_ARMS: u8 = 1;
 /// What the cloth leaves inside an arm there is hidden by the renderer's depth test, as the real arm
 /// hides the shirt it presses against the torso.
 pub fn collision_group(part_name: &str) -> u8 {
-    if part_name.contains("upper_arm") || part_name.contains("forearm") || part_name.contains("hand") {
+    if part_name.contains("upper_arm")
+        || part_name.contains("forearm")
+        || part_name.contains("hand")
+    {
         GROUP_ARMS
     } else {
         GROUP_TRUNK
@@ -96,7 +99,11 @@ pub fn body_proxies(body: &Body, margin_cm: f32) -> Vec<ProxyCapsule> {
 fn part_proxies(index: usize, part: &BodyPart, margin: f32, out: &mut Vec<ProxyCapsule>) {
     let along = part.end - part.start;
     let length = along.length();
-    let d = if length > 1e-6 { along / length } else { Vec3::Y };
+    let d = if length > 1e-6 {
+        along / length
+    } else {
+        Vec3::Y
+    };
     let mut e1 = part.width_axis - d * part.width_axis.dot(d);
     if e1.length_squared() < 1e-6 {
         e1 = d.any_orthonormal_vector();
@@ -130,11 +137,7 @@ fn part_proxies(index: usize, part: &BodyPart, margin: f32, out: &mut Vec<ProxyC
     }
     let a = part.start + d * pull_start;
     let b = part.end - d * pull_end;
-    let signs: &[f32] = if stadium {
-        &[-1.0, 0.0, 1.0]
-    } else {
-        &[0.0]
-    };
+    let signs: &[f32] = if stadium { &[-1.0, 0.0, 1.0] } else { &[0.0] };
     for &sign in signs {
         out.push(ProxyCapsule {
             part: index,
@@ -288,7 +291,8 @@ impl BodyRig {
     }
 
     fn finish_pose(&self, pose: &mut BodyPose) {
-        self.skeleton.forward_kinematics(&pose.frame, &mut pose.bones);
+        self.skeleton
+            .forward_kinematics(&pose.frame, &mut pose.bones);
         pose.capsules.clear();
         pose.capsules
             .extend(self.proxies.iter().map(|p| p.posed(&pose.bones)));
@@ -336,7 +340,7 @@ mod tests {
     }
 
     #[test]
-    fn flat_part_is_a_stadium_of_two_capsules() {
+    fn flat_part_is_a_stadium_of_three_capsules() {
         // 15 × 10 semi-axes, cap 0.7: capsules of radius 10 (+0.5) centred at −5, 0, +5 along X;
         // ends pulled in by 10 − 7 = 3 cm.
         let body = Body {
@@ -372,7 +376,8 @@ mod tests {
         assert_eq!(shortest_degrees(350.0), -10.0);
         assert_eq!(shortest_degrees(-350.0), 10.0);
         assert_eq!(shortest_degrees(90.0), 90.0);
-        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        let clip =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
         let motion = Motion::load(&clip).expect("clip");
         let subject = Subject::find("chidi").expect("chidi");
         let rig = BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig");
