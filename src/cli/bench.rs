@@ -113,7 +113,8 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let cloth_options = || {
         let mut o = ClothOptions::new(GarmentChoice::Procedural(kind), SimulationMode::Live);
         o.edge_cm = Some(edge);
-        o.sizing_frames = 1;
+        // The template's size, so the garment has the asked vertex count (timing, not fit).
+        o.known_size = Some(suitcap::body_size::BodySize::TEMPLATE);
         o
     };
     let mut cloth = ClothStage::new(&template, cloth_options())?;
