@@ -9,10 +9,12 @@
 //!   → body proxies → cloth → render + composite
 //! ```
 //!
-//! Modules present so far: [`source`] (frames in), [`suit`] (the suit definition), [`skeleton`] and
-//! [`bvh`] (hierarchy, forward kinematics, BVH files), [`camera`] (pinhole model, `camera.toml`),
-//! [`body`] (subjects and capsule bodies carrying the suit pattern), [`raster`] (z-buffered triangles),
-//! [`colour`] (HSV), [`dataset`] (the generator's mocap-aligned dataset format) and [`io`].
+//! Frames come from [`source`]; [`segment`] gives the person [`mask`]; [`descriptor`] the 304-D
+//! descriptor; [`pose`] the regressed pose, its smoothing, limits and root registration, and
+//! [`pipeline`] joins those per stream. [`body_size`], [`cloth`], [`render`] and [`composite`] put a
+//! garment on the estimated body and into the frame; [`tryon`] runs every stage on threads joined by
+//! [`queue`]s. Around them: [`suit`], [`skeleton`] and [`bvh`], [`camera`], [`body`], [`raster`],
+//! [`colour`], [`dataset`], [`model`], [`pattern`], [`preview`] and [`io`].
 
 pub mod body;
 pub mod body_size;

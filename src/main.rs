@@ -1,9 +1,11 @@
 //! `suitcap`: the runtime command line.
 //!
-//! Subcommands so far: `capture` records any frame source (webcam, frame directory, Y4M) into a
-//! directory of numbered PNG frames — the first step of recording a new suit's training video —
-//! `segment` writes the person mask of every frame with the suit's trained segmenter, and `check`
-//! validates a suit definition and a dataset.
+//! `live` (camera → garment in a window, BVH recording), `run` (the same on recorded input, writing
+//! the take, the composited frames and a preview), `drape` (a garment on a given motion), `demo` (the
+//! quick start) and `bench` live in [`cli`]; here are the smaller tools: `capture` records any frame
+//! source into numbered PNG or JPEG frames (the first step of recording a new suit's training video),
+//! `segment` and `describe` run single stages over a sequence, `check` validates a suit and a dataset,
+//! and `suit pattern` prints the suit's sewing panels.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
