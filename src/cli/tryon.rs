@@ -657,9 +657,14 @@ pub fn live(
     pose: &PoseArgs,
 ) -> anyhow::Result<()> {
     use minifb::{Key, KeyRepeat, Window, WindowOptions};
-    let camera = camera_for(device, suit_dir, camera)?;
+    // A calibration given, beside a recorded input, or in the suit; else a typical webcam.
+    let calibrated = match camera_for(device, suit_dir, camera) {
+        Ok(c) => Some(c),
+        Err(e) if camera.is_some() => return Err(e),
+        Err(_) => None,
+    };
     let options = SourceOptions {
-        size: size.or(Some((camera.intrinsics.width, camera.intrinsics.height))),
+        size: size.or(calibrated.map(|c| (c.intrinsics.width, c.intrinsics.height))),
         fps,
         ..SourceOptions::default()
     };
@@ -668,6 +673,16 @@ pub fn live(
     let rate = probe.frame_rate().unwrap_or(30.0);
     let described = probe.describe();
     drop(probe);
+    let camera = match calibrated {
+        Some(c) => c,
+        None => {
+            println!(
+                "no camera calibration (--camera, or camera.toml in {}): assuming a webcam with a 60° horizontal field of view, level, 1.2 m above the floor, the person about 3.5 m away",
+                suit_dir.display()
+            );
+            default_webcam(actual)
+        }
+    };
     if actual != (camera.intrinsics.width, camera.intrinsics.height) {
         bail!(
             "{device} gives {}x{} frames, but the camera calibration is for {}x{}: pass --camera with a calibration at the camera's size",
@@ -811,6 +826,17 @@ pub fn live(
         bail!("the camera failed: {e}; everything recorded before it was written");
     }
     Ok(())
+}
+
+/// An uncalibrated webcam: 60° across, level, 120 cm above the mocap floor, 350 cm from the origin.
+fn default_webcam((width, height): (u32, u32)) -> Camera {
+    use glam::Vec3;
+    Camera::look_at(
+        suitcap::camera::Intrinsics::from_fov(width, height, 60.0),
+        Vec3::new(0.0, 120.0, 350.0),
+        Vec3::new(0.0, 120.0, 0.0),
+        Vec3::Y,
+    )
 }
 
 /// `take.bvh`, then `take-2.bvh`, `take-3.bvh`, …
