@@ -220,10 +220,30 @@ mod old {
         };
         let area = area.abs();
         let (w, h) = (buffer.width as f32, buffer.height as f32);
-        let min_x = v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min).floor().max(0.0);
-        let max_x = v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max).ceil().min(w);
-        let min_y = v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min).floor().max(0.0);
-        let max_y = v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max).ceil().min(h);
+        let min_x = v
+            .iter()
+            .map(|p| p.x)
+            .fold(f32::INFINITY, f32::min)
+            .floor()
+            .max(0.0);
+        let max_x = v
+            .iter()
+            .map(|p| p.x)
+            .fold(f32::NEG_INFINITY, f32::max)
+            .ceil()
+            .min(w);
+        let min_y = v
+            .iter()
+            .map(|p| p.y)
+            .fold(f32::INFINITY, f32::min)
+            .floor()
+            .max(0.0);
+        let max_y = v
+            .iter()
+            .map(|p| p.y)
+            .fold(f32::NEG_INFINITY, f32::max)
+            .ceil()
+            .min(h);
         if min_x >= max_x || min_y >= max_y {
             return;
         }

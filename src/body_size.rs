@@ -105,7 +105,12 @@ pub fn frame_ratios(silhouette: &Mask, model: &Mask) -> Option<(f32, f32)> {
 
 /// Rasterizes the capsules of `body` posed by `world` into a person mask as `camera` sees it.
 /// `depth` is scratch space, resized as needed.
-pub fn body_mask(body: &Body, world: &[Affine3A], camera: &Camera, depth: &mut DepthBuffer) -> Mask {
+pub fn body_mask(
+    body: &Body,
+    world: &[Affine3A],
+    camera: &Camera,
+    depth: &mut DepthBuffer,
+) -> Mask {
     BodyMasker::new(body).mask(world, camera, depth)
 }
 
@@ -159,7 +164,9 @@ impl BodyMasker {
                 let [Some(a), Some(b), Some(c)] = t.map(|i| self.projected[i as usize]) else {
                     continue;
                 };
-                draw_triangle(depth, [a, b, c], Cull::None, 1.0, |f| pixels[f.index] = true);
+                draw_triangle(depth, [a, b, c], Cull::None, 1.0, |f| {
+                    pixels[f.index] = true
+                });
             }
         }
         Mask::from_pixels(width, height, pixels).unwrap_or_else(|| Mask::empty(width, height))
@@ -315,7 +322,8 @@ mod tests {
     /// A known subject rendered with the body model is measured back at its own size.
     #[test]
     fn a_rendered_subject_is_measured_at_its_size() {
-        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        let clip =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
         let motion = crate::bvh::Motion::load(&clip).expect("clip");
         let template = &motion.skeleton;
         let truth = BodySize {

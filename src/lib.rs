@@ -38,5 +38,5 @@ pub mod render;
 pub mod segment;
 pub mod skeleton;
 pub mod source;
-pub mod tryon;
 pub mod suit;
+pub mod tryon;

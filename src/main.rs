@@ -292,7 +292,8 @@ fn save_frame(image: &image::RgbImage, path: &Path, jpeg: Option<u8>) -> anyhow:
         None => image.save(path)?,
         Some(quality) => {
             let file = std::io::BufWriter::new(std::fs::File::create(path)?);
-            image::codecs::jpeg::JpegEncoder::new_with_quality(file, quality).encode_image(image)?;
+            image::codecs::jpeg::JpegEncoder::new_with_quality(file, quality)
+                .encode_image(image)?;
         }
     }
     Ok(())
@@ -709,7 +710,15 @@ fn main() -> ExitCode {
                     dpi,
                     marker_ids,
                 },
-        } => suit_pattern(suit, out, subject.as_deref(), *height, *girth, *dpi, *marker_ids),
+        } => suit_pattern(
+            suit,
+            out,
+            subject.as_deref(),
+            *height,
+            *girth,
+            *dpi,
+            *marker_ids,
+        ),
         Command::Describe {
             suit,
             input,

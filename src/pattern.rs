@@ -221,7 +221,8 @@ pub fn write_suit_pattern(
     let motion = Motion::load(&skeleton_path)?;
     // The suit's skeleton is the regressor's template, already scaled to one training subject:
     // bring it back to the base figure's height before scaling it to this subject.
-    let to_base = crate::body::BASE_HEIGHT_CM / crate::body_size::skeleton_height_cm(&motion.skeleton);
+    let to_base =
+        crate::body::BASE_HEIGHT_CM / crate::body_size::skeleton_height_cm(&motion.skeleton);
     let base = motion.skeleton.map_offsets(|_, offset| offset * to_base);
     let skeleton = subject.scale_skeleton(&base);
     let body = Body::new(subject, &skeleton).map_err(|source| PatternError::Body {

@@ -232,7 +232,11 @@ impl Edge {
     fn walk(&self, row: f32, lo: u32, hi: u32) -> (u32, u32) {
         if self.dy == 0.0 {
             // Horizontal: the same value all along the row.
-            return if self.covers(row, lo) { (lo, hi) } else { (lo, lo) };
+            return if self.covers(row, lo) {
+                (lo, hi)
+            } else {
+                (lo, lo)
+            };
         }
         let p = self.ax_half + row * self.inv_dy;
         let mut x = (p.max(lo as f32).min(hi as f32) as u32).clamp(lo, hi);
@@ -299,10 +303,30 @@ pub fn draw_triangle(
     let area = area.abs();
 
     let (w, h) = (buffer.width as f32, buffer.height as f32);
-    let min_x = v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min).floor().max(0.0);
-    let max_x = v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max).ceil().min(w);
-    let min_y = v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min).floor().max(0.0);
-    let max_y = v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max).ceil().min(h);
+    let min_x = v
+        .iter()
+        .map(|p| p.x)
+        .fold(f32::INFINITY, f32::min)
+        .floor()
+        .max(0.0);
+    let max_x = v
+        .iter()
+        .map(|p| p.x)
+        .fold(f32::NEG_INFINITY, f32::max)
+        .ceil()
+        .min(w);
+    let min_y = v
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min)
+        .floor()
+        .max(0.0);
+    let max_y = v
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::NEG_INFINITY, f32::max)
+        .ceil()
+        .min(h);
     if min_x >= max_x || min_y >= max_y {
         return;
     }
@@ -382,7 +406,11 @@ impl Spans {
         for py in bounds.y.0..bounds.y.1 {
             let cy = py as f32 + 0.5;
             let (r0, r1, r2) = (e0.row(cy), e1.row(cy), e2.row(cy));
-            let (l0, l1, l2) = (e0.limits(r0, lo, hi), e1.limits(r1, lo, hi), e2.limits(r2, lo, hi));
+            let (l0, l1, l2) = (
+                e0.limits(r0, lo, hi),
+                e1.limits(r1, lo, hi),
+                e2.limits(r2, lo, hi),
+            );
             let start = l0.0.max(l1.0).max(l2.0);
             let end = l0.1.min(l1.1).min(l2.1);
             if start >= end {
@@ -645,7 +673,11 @@ mod tests {
     #[test]
     fn extreme_depths_take_the_per_pixel_path_and_match_the_reference_exactly() {
         for depth in [1e36f32, 3e-37] {
-            let tri = [sv(0.5, 0.25, depth), sv(7.5, 1.0, depth * 2.0), sv(2.0, 7.75, depth)];
+            let tri = [
+                sv(0.5, 0.25, depth),
+                sv(7.5, 1.0, depth * 2.0),
+                sv(2.0, 7.75, depth),
+            ];
             let (mut ours, mut theirs) = (DepthBuffer::new(8, 8), DepthBuffer::new(8, 8));
             let mut a = Vec::new();
             draw_triangle(&mut ours, tri, Cull::None, 0.0, |f| a.push(f));
@@ -701,10 +733,30 @@ mod tests {
             };
             let area = area.abs();
             let (w, h) = (buffer.width as f32, buffer.height as f32);
-            let min_x = v.iter().map(|p| p.x).fold(f32::INFINITY, f32::min).floor().max(0.0);
-            let max_x = v.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max).ceil().min(w);
-            let min_y = v.iter().map(|p| p.y).fold(f32::INFINITY, f32::min).floor().max(0.0);
-            let max_y = v.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max).ceil().min(h);
+            let min_x = v
+                .iter()
+                .map(|p| p.x)
+                .fold(f32::INFINITY, f32::min)
+                .floor()
+                .max(0.0);
+            let max_x = v
+                .iter()
+                .map(|p| p.x)
+                .fold(f32::NEG_INFINITY, f32::max)
+                .ceil()
+                .min(w);
+            let min_y = v
+                .iter()
+                .map(|p| p.y)
+                .fold(f32::INFINITY, f32::min)
+                .floor()
+                .max(0.0);
+            let max_y = v
+                .iter()
+                .map(|p| p.y)
+                .fold(f32::NEG_INFINITY, f32::max)
+                .ceil()
+                .min(h);
             if min_x >= max_x || min_y >= max_y {
                 return;
             }
@@ -823,7 +875,9 @@ mod tests {
         fn rounding(tri: [ScreenVertex; 3], x: u32, y: u32) -> f32 {
             let (cx, cy) = (x as f64 + 0.5, y as f64 + 0.5);
             let p = tri.map(|v| (v.x as f64, v.y as f64));
-            let area = ((p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[1].1 - p[0].1) * (p[2].0 - p[0].0)).abs();
+            let area = ((p[1].0 - p[0].0) * (p[2].1 - p[0].1)
+                - (p[1].1 - p[0].1) * (p[2].0 - p[0].0))
+                .abs();
             let terms: f64 = (0..3)
                 .map(|k| {
                     let (a, b) = (p[(k + 1) % 3], p[(k + 2) % 3]);

@@ -61,11 +61,19 @@ fn run_writes_the_take_the_composited_frames_and_a_preview() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let data = generated_clip(&tmp.path().join("clip"), 14);
     let out = tmp.path().join("out");
-    let output = run(&data.join("frames"), &data.join("camera.toml"), &out, &["--overlays", "skeleton,markers"]);
+    let output = run(
+        &data.join("frames"),
+        &data.join("camera.toml"),
+        &out,
+        &["--overlays", "skeleton,markers"],
+    );
     assert!(output.status.success(), "{}", text(&output));
     assert_eq!(take_frames(&out.join("take.bvh")), 14);
     for k in 0..14 {
-        assert!(out.join(format!("frames/{k:06}.png")).is_file(), "frame {k}");
+        assert!(
+            out.join(format!("frames/{k:06}.png")).is_file(),
+            "frame {k}"
+        );
     }
     let gif = image::open(out.join("preview.gif"));
     assert!(gif.is_ok(), "preview.gif does not decode");
@@ -73,7 +81,11 @@ fn run_writes_the_take_the_composited_frames_and_a_preview() {
     assert_eq!(rows.lines().count(), 15);
     // The garment is put on once the person has been measured.
     assert!(rows.lines().any(|l| l.contains(",worn,")), "{rows}");
-    assert!(text(&output).contains("per-stage median"), "{}", text(&output));
+    assert!(
+        text(&output).contains("per-stage median"),
+        "{}",
+        text(&output)
+    );
 }
 
 #[test]
@@ -84,7 +96,9 @@ fn an_input_failing_mid_take_keeps_the_frames_before_it() {
     let y4m = tmp.path().join("take.y4m");
     let mut writer = Y4mWriter::create(&y4m, 640, 480, 30.0, Y4mChroma::C420).expect("create");
     for k in 0..8 {
-        let frame = image::open(data.join(format!("frames/{k:06}.png"))).expect("frame").to_rgb8();
+        let frame = image::open(data.join(format!("frames/{k:06}.png")))
+            .expect("frame")
+            .to_rgb8();
         writer.write_frame(&frame).expect("write");
     }
     writer.finish().expect("flush");
@@ -97,7 +111,10 @@ fn an_input_failing_mid_take_keeps_the_frames_before_it() {
     let output = run(&y4m, &data.join("camera.toml"), &out, &[]);
     assert!(!output.status.success(), "{}", text(&output));
     let message = text(&output);
-    assert!(message.contains("take.y4m") && message.contains("frame 5"), "{message}");
+    assert!(
+        message.contains("take.y4m") && message.contains("frame 5"),
+        "{message}"
+    );
     assert_eq!(take_frames(&out.join("take.bvh")), 5, "{message}");
     assert!(out.join("frames/000004.png").is_file());
 }
@@ -116,11 +133,20 @@ fn a_corrupt_frame_is_skipped_and_named_and_an_empty_scene_hides_the_garment() {
     let output = run(&frames, &data.join("camera.toml"), &out, &[]);
     let message = text(&output);
     assert!(output.status.success(), "{message}");
-    assert!(message.contains("1 corrupt frames skipped") && message.contains("000006.png"), "{message}");
+    assert!(
+        message.contains("1 corrupt frames skipped") && message.contains("000006.png"),
+        "{message}"
+    );
     assert_eq!(take_frames(&out.join("take.bvh")), 11);
     let rows = std::fs::read_to_string(out.join("frames.csv")).expect("frames.csv");
-    let empty = rows.lines().find(|l| l.starts_with("9,")).expect("row of frame 9");
-    assert!(empty.starts_with("9,0,") && empty.contains(",hidden,"), "{empty}");
+    let empty = rows
+        .lines()
+        .find(|l| l.starts_with("9,"))
+        .expect("row of frame 9");
+    assert!(
+        empty.starts_with("9,0,") && empty.contains(",hidden,"),
+        "{empty}"
+    );
 }
 
 #[test]
@@ -145,13 +171,20 @@ fn sigterm_finalises_the_take() {
     while !first.exists() && std::time::Instant::now() < deadline {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    let status = Command::new("kill").arg("-TERM").arg(child.id().to_string()).status().expect("kill");
+    let status = Command::new("kill")
+        .arg("-TERM")
+        .arg(child.id().to_string())
+        .status()
+        .expect("kill");
     assert!(status.success());
     let output = child.wait_with_output().expect("exits");
     let message = text(&output);
     let frames = take_frames(&out.join("take.bvh"));
     assert!(frames >= 3, "{frames} frames\n{message}");
-    assert!(frames < 40, "the signal did not stop the run early\n{message}");
+    assert!(
+        frames < 40,
+        "the signal did not stop the run early\n{message}"
+    );
     assert!(message.contains("stopped by signal"), "{message}");
 }
 
@@ -174,13 +207,24 @@ fn drape_composites_a_garment_on_the_true_motion_and_reports_quality() {
         .expect("runs");
     let message = text(&output);
     assert!(output.status.success(), "{message}");
-    assert!(message.contains("edge strain") && message.contains("ground truth"), "{message}");
+    assert!(
+        message.contains("edge strain") && message.contains("ground truth"),
+        "{message}"
+    );
     assert!(out.join("frames/000009.png").is_file());
     assert!(image::open(out.join("preview.gif")).is_ok());
     // The garment changed the picture.
-    let before = image::open(data.join("frames/000005.png")).expect("frame").to_rgb8();
-    let after = image::open(out.join("frames/000005.png")).expect("draped").to_rgb8();
-    let changed = before.pixels().zip(after.pixels()).filter(|(a, b)| a != b).count();
+    let before = image::open(data.join("frames/000005.png"))
+        .expect("frame")
+        .to_rgb8();
+    let after = image::open(out.join("frames/000005.png"))
+        .expect("draped")
+        .to_rgb8();
+    let changed = before
+        .pixels()
+        .zip(after.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
     assert!(changed > 500, "only {changed} pixels changed");
 }
 
@@ -223,7 +267,11 @@ fn suit_pattern_writes_true_size_panels() {
         .arg(tmp.path())
         .output()
         .expect("runs");
-    assert!(!bad.status.success() && text(&bad).contains("--dpi"), "{}", text(&bad));
+    assert!(
+        !bad.status.success() && text(&bad).contains("--dpi"),
+        "{}",
+        text(&bad)
+    );
 }
 
 /// The live app in a virtual X display (CI installs Xvfb; without `xvfb-run` the test says so and

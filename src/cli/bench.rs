@@ -206,10 +206,24 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         let started = Instant::now();
         let result = pose.pipeline.process(frame, &camera, None);
         let pose_ms = started.elapsed().as_secs_f64() * 1e3;
-        let c = cloth.advance(&result.frame, k as f64 / 30.0, result.person, &result.mask, &camera)?;
+        let c = cloth.advance(
+            &result.frame,
+            k as f64 / 30.0,
+            result.person,
+            &result.mask,
+            &camera,
+        )?;
         vertices = vertices.max(c.positions.len());
         let mut image = frame.clone();
-        let (r, comp) = render.draw(&mut image, &camera, &c, &overlay, Overlays::default(), &[], &[])?;
+        let (r, comp) = render.draw(
+            &mut image,
+            &camera,
+            &c,
+            &overlay,
+            Overlays::default(),
+            &[],
+            &[],
+        )?;
         s.segment.push(result.times.segment);
         s.describe.push(result.times.describe);
         s.regress.push(result.times.regress);

@@ -22,7 +22,9 @@ use suitcap::pose::smoothing::{JointLimits, PoseFilter, SmoothingParams, JOINT_L
 use suitcap::preview::{GifPreview, PreviewSettings};
 use suitcap::render::RenderSettings;
 use suitcap::source::{open_source, FrameSource, SourceOptions};
-use suitcap::tryon::runner::{self, Controls, FrameTimes, InputKind, Output, PoseStage, RunSummary};
+use suitcap::tryon::runner::{
+    self, Controls, FrameTimes, InputKind, Output, PoseStage, RunSummary,
+};
 use suitcap::tryon::{
     ClothOptions, ClothStage, ClothStatus, GarmentChoice, Overlays, RenderStage, SimulationMode,
 };
@@ -64,7 +66,9 @@ pub fn parse_overlays(names: &[String]) -> anyhow::Result<Overlays> {
             "markers" => o.markers = true,
             "skeleton" => o.skeleton = true,
             "timings" => o.timings = true,
-            other => bail!("--overlays: unknown overlay '{other}' (mask, markers, skeleton, timings)"),
+            other => {
+                bail!("--overlays: unknown overlay '{other}' (mask, markers, skeleton, timings)")
+            }
         }
     }
     Ok(o)
@@ -101,7 +105,11 @@ fn render_stage(pipeline: &PosePipeline) -> RenderStage {
         .suit
         .markers
         .iter()
-        .map(|c| c.hsv.to_rgb().map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+        .map(|c| {
+            c.hsv
+                .to_rgb()
+                .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+        })
         .collect();
     RenderStage::new(RenderSettings::default(), colours)
 }
@@ -131,12 +139,19 @@ fn pose_stage(suit_dir: &Path, args: &PoseArgs) -> anyhow::Result<PoseStage> {
 }
 
 /// The camera of an input: `--camera`, else camera.toml beside the input, else in the suit.
-pub fn camera_for(input: &str, suit_dir: &Path, camera: Option<&PathBuf>) -> anyhow::Result<Camera> {
+pub fn camera_for(
+    input: &str,
+    suit_dir: &Path,
+    camera: Option<&PathBuf>,
+) -> anyhow::Result<Camera> {
     let path = match camera {
         Some(path) => path.clone(),
         None => {
             let input = Path::new(input);
-            let beside = [input.join("camera.toml"), input.with_file_name("camera.toml")];
+            let beside = [
+                input.join("camera.toml"),
+                input.with_file_name("camera.toml"),
+            ];
             match beside.into_iter().find(|p| p.is_file()) {
                 Some(p) => p,
                 None => suit_dir.join("camera.toml"),
@@ -260,7 +275,10 @@ impl RunOutputs {
             .cloth
             .quality
             .map_or((String::new(), String::new()), |q| {
-                (format!("{:.5}", q.strain_p95), format!("{:.3}", q.penetration_cm))
+                (
+                    format!("{:.5}", q.strain_p95),
+                    format!("{:.3}", q.penetration_cm),
+                )
             });
         self.rows.push_str(&format!(
             "{},{},{},{},{strain},{depth},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}\n",
@@ -305,9 +323,15 @@ pub fn write_png(image: &RgbImage, path: &Path) -> anyhow::Result<()> {
         image::codecs::png::CompressionType::Fast,
         image::codecs::png::FilterType::Sub,
     )
-    .write_image(image.as_raw(), image.width(), image.height(), image::ExtendedColorType::Rgb8)
+    .write_image(
+        image.as_raw(),
+        image.width(),
+        image.height(),
+        image::ExtendedColorType::Rgb8,
+    )
     .with_context(|| format!("cannot encode {}", path.display()))?;
-    suitcap::io::write_atomic(path, &bytes).with_context(|| format!("cannot write {}", path.display()))
+    suitcap::io::write_atomic(path, &bytes)
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 use image::ImageEncoder;
@@ -328,7 +352,11 @@ pub fn run(
     } else {
         SimulationMode::Quality
     };
-    let cloth = cloth_stage(garment, &pose_stage.pipeline.regressor.skeleton.skeleton, mode)?;
+    let cloth = cloth_stage(
+        garment,
+        &pose_stage.pipeline.regressor.skeleton.skeleton,
+        mode,
+    )?;
     let render = render_stage(&pose_stage.pipeline);
     // Open once here to check the size and learn the rate; the capture thread opens its own.
     let probe = open_source(input, &SourceOptions::default())?;
@@ -362,7 +390,9 @@ pub fn run(
     let (mut nobody, mut failure) = (0usize, None::<anyhow::Error>);
     let input_owned = input.to_owned();
     let summary = runner::run(
-        move || open_source(&input_owned, &SourceOptions::default()).map(|s| s as Box<dyn FrameSource>),
+        move || {
+            open_source(&input_owned, &SourceOptions::default()).map(|s| s as Box<dyn FrameSource>)
+        },
         InputKind::Recorded,
         camera,
         pose_stage,
@@ -475,7 +505,11 @@ pub fn demo(suit_dir: &Path, out: &Path) -> anyhow::Result<()> {
     let suit = suitcap::suit::SuitDefinition::load_dir(suit_dir)?;
     let layout = suitcap::pose::PoseLayout::new(&suit.skeleton, &truth.skeleton)?;
     let mut errors = suitcap::pose::eval::JointErrors::new(
-        suit.skeleton.joints.iter().map(|j| j.name.clone()).collect(),
+        suit.skeleton
+            .joints
+            .iter()
+            .map(|j| j.name.clone())
+            .collect(),
     );
     for k in 0..truth.frame_count().min(take.frame_count()) {
         errors.add(&layout, truth.frame(k), take.frame(k));
@@ -525,7 +559,13 @@ pub fn drape(
                 let Ok(grey) = image::open(&path).map(|i| i.to_luma8()) else {
                     continue;
                 };
-                estimator.add_frame(&Mask::from_gray(&grey), &body, &template, motion.frame(k), &camera);
+                estimator.add_frame(
+                    &Mask::from_gray(&grey),
+                    &body,
+                    &template,
+                    motion.frame(k),
+                    &camera,
+                );
             }
             let size = estimator.estimate();
             println!(
@@ -597,7 +637,8 @@ pub fn drape(
             quality.push(q);
         }
         cloth_ms.push(cloth.milliseconds);
-        let pose = suitcap::tryon::PoseOverlay::new(None, Vec::new(), &template, motion.frame(k), &camera);
+        let pose =
+            suitcap::tryon::PoseOverlay::new(None, Vec::new(), &template, motion.frame(k), &camera);
         let (r, c) = render.draw(&mut image, &camera, &cloth, &pose, overlays, &[], &[])?;
         render_ms.push(r + c);
         write_png(&image, &out_frames.join(format!("{k:06}.png")))?;
@@ -693,7 +734,11 @@ pub fn live(
         );
     }
     let pose_stage = pose_stage(suit_dir, pose)?;
-    let cloth = cloth_stage(garment, &pose_stage.pipeline.regressor.skeleton.skeleton, SimulationMode::Live)?;
+    let cloth = cloth_stage(
+        garment,
+        &pose_stage.pipeline.regressor.skeleton.skeleton,
+        SimulationMode::Live,
+    )?;
     let render = render_stage(&pose_stage.pipeline);
     let mut window = Window::new(
         &format!("suitcap live — {described}"),
@@ -721,9 +766,9 @@ pub fn live(
     let banner_flag = Arc::clone(&recording_flag);
     let mut timings = TimingLog::default();
     let mut buffer: Vec<u32> = Vec::new();
-    let mut garment_choice = GarmentChoice::parse(&garment.garment).unwrap_or(GarmentChoice::Procedural(
-        suitcap::cloth::garment::GarmentKind::TShirt,
-    ));
+    let mut garment_choice = GarmentChoice::parse(&garment.garment).unwrap_or(
+        GarmentChoice::Procedural(suitcap::cloth::garment::GarmentKind::TShirt),
+    );
     let mut failure: Option<anyhow::Error> = None;
     let device_owned = device.to_owned();
     println!("keys: G garment · M mask · K markers · S skeleton · T timings · R record on/off · Esc/Q quit");
@@ -766,7 +811,11 @@ pub fn live(
                 (r as u32) << 16 | (g as u32) << 8 | b as u32
             }));
             let (w, h) = output.image.dimensions();
-            if window.update_with_buffer(&buffer, w as usize, h as usize).is_err() || !window.is_open() {
+            if window
+                .update_with_buffer(&buffer, w as usize, h as usize)
+                .is_err()
+                || !window.is_open()
+            {
                 return false;
             }
             for key in window.get_keys_pressed(KeyRepeat::No) {
@@ -844,12 +893,19 @@ fn numbered(base: &Path, index: usize) -> PathBuf {
     if index == 0 {
         return base.to_owned();
     }
-    let stem = base.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = base
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     base.with_file_name(format!("{stem}-{}.bvh", index + 1))
 }
 
 impl Take {
-    fn new_for(skeleton: &suitcap::skeleton::Skeleton, fps: f64, path: PathBuf) -> anyhow::Result<Take> {
+    fn new_for(
+        skeleton: &suitcap::skeleton::Skeleton,
+        fps: f64,
+        path: PathBuf,
+    ) -> anyhow::Result<Take> {
         Ok(Take {
             motion: Motion::new(skeleton.clone(), 1.0 / fps, Vec::new())?,
             path,

@@ -14,8 +14,8 @@
 pub mod chart;
 pub mod correction;
 pub mod eval;
-pub mod regressor;
 pub mod registration;
+pub mod regressor;
 pub mod rvm;
 pub mod smoothing;
 

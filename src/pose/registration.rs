@@ -64,7 +64,12 @@ impl Registration {
         let factor = self.downscale as f32;
         skeleton.forward_kinematics(frame, &mut self.world);
         let model = self.masker.mask(&self.world, &small, &mut self.depth);
-        let target = block_mask(silhouette, self.downscale, small.intrinsics.width, small.intrinsics.height);
+        let target = block_mask(
+            silhouette,
+            self.downscale,
+            small.intrinsics.width,
+            small.intrinsics.height,
+        );
         let reach = (MAX_SHIFT_FRACTION * small.intrinsics.width as f32) as i32;
         let (dx, dy) = best_overlap(&model, &target, reach)?;
         let shift = Vec2::new(dx as f32, dy as f32) * factor;
@@ -178,7 +183,10 @@ pub fn centroid_within(mask: &Mask, [x0, y0, x1, y1]: [f32; 4]) -> Option<Vec2> 
     let width = mask.width() as usize;
     let clip = |v: f32, max: usize| (v.max(0.0).floor() as usize).min(max);
     let (cx0, cx1) = (clip(x0, width), clip(x1.ceil(), width));
-    let (cy0, cy1) = (clip(y0, mask.height() as usize), clip(y1.ceil(), mask.height() as usize));
+    let (cy0, cy1) = (
+        clip(y0, mask.height() as usize),
+        clip(y1.ceil(), mask.height() as usize),
+    );
     let (mut sx, mut sy, mut n) = (0.0f64, 0.0f64, 0usize);
     for row in cy0..cy1 {
         let pixels = &mask.pixels()[row * width + cx0..row * width + cx1];
@@ -210,24 +218,37 @@ mod tests {
         assert_eq!(centroid(&m), Some(Vec2::new(2.0, 2.0)));
         assert_eq!(centroid(&Mask::empty(3, 3)), None);
         // Only the left column inside the window [0, 2) × [0, 4).
-        assert_eq!(centroid_within(&m, [0.0, 0.0, 2.0, 4.0]), Some(Vec2::new(1.5, 2.0)));
+        assert_eq!(
+            centroid_within(&m, [0.0, 0.0, 2.0, 4.0]),
+            Some(Vec2::new(1.5, 2.0))
+        );
     }
 
     /// A body rendered 12 cm to the side of where the frame puts it is moved back onto it.
     #[test]
     fn a_root_off_to_the_side_is_moved_onto_the_silhouette() {
-        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        let clip =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
         let motion = crate::bvh::Motion::load(&clip).expect("clip");
         let skeleton = &motion.skeleton;
         let body = template_body(skeleton).expect("body");
         let root = skeleton.joint(0);
         let channel = |name: crate::skeleton::Channel| {
-            root.first_channel + root.channels.iter().position(|c| *c == name).expect("channel")
+            root.first_channel
+                + root
+                    .channels
+                    .iter()
+                    .position(|c| *c == name)
+                    .expect("channel")
         };
         use crate::skeleton::Channel::*;
         let root_position = [channel(Xposition), channel(Yposition), channel(Zposition)];
         let truth: Vec<f32> = motion.frame(40).to_vec();
-        let hip = Vec3::new(truth[root_position[0]], truth[root_position[1]], truth[root_position[2]]);
+        let hip = Vec3::new(
+            truth[root_position[0]],
+            truth[root_position[1]],
+            truth[root_position[2]],
+        );
         let camera = Camera::look_at(
             Intrinsics::from_fov(320, 240, 60.0),
             hip + Vec3::new(0.0, 10.0, 450.0),

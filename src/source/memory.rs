@@ -32,12 +32,21 @@ impl MemorySource {
         if frames.iter().any(|f| f.dimensions() != size) {
             return None;
         }
-        MemorySource::from_stored(frames.into_iter().map(Stored::Decoded).collect(), size, fps, length)
+        MemorySource::from_stored(
+            frames.into_iter().map(Stored::Decoded).collect(),
+            size,
+            fps,
+            length,
+        )
     }
 
     /// Frames kept as encoded image files, decoded when delivered. `Err` names the first file that
     /// does not decode or differs in size from the first.
-    pub fn from_encoded(files: Vec<(String, Vec<u8>)>, fps: f64, length: u64) -> Result<MemorySource, String> {
+    pub fn from_encoded(
+        files: Vec<(String, Vec<u8>)>,
+        fps: f64,
+        length: u64,
+    ) -> Result<MemorySource, String> {
         let mut size = None;
         for (name, bytes) in &files {
             let dims = image::load_from_memory(bytes)
@@ -45,7 +54,10 @@ impl MemorySource {
                 .to_rgb8()
                 .dimensions();
             if *size.get_or_insert(dims) != dims {
-                return Err(format!("{name}: {}x{} differs from the first frame", dims.0, dims.1));
+                return Err(format!(
+                    "{name}: {}x{} differs from the first frame",
+                    dims.0, dims.1
+                ));
             }
         }
         let size = size.ok_or("no frames")?;
@@ -53,7 +65,12 @@ impl MemorySource {
         MemorySource::from_stored(stored, size, fps, length).ok_or_else(|| "no frames".to_owned())
     }
 
-    fn from_stored(frames: Vec<Stored>, size: (u32, u32), fps: f64, length: u64) -> Option<MemorySource> {
+    fn from_stored(
+        frames: Vec<Stored>,
+        size: (u32, u32),
+        fps: f64,
+        length: u64,
+    ) -> Option<MemorySource> {
         (!frames.is_empty()).then_some(MemorySource {
             frames,
             size,
@@ -128,8 +145,13 @@ mod tests {
 
     #[test]
     fn replays_cyclically_and_fails_on_cue() {
-        let frames = vec![image::RgbImage::new(2, 2), image::RgbImage::from_pixel(2, 2, image::Rgb([9, 9, 9]))];
-        let mut source = MemorySource::new(frames, 10.0, 5).expect("frames").failing_at(3);
+        let frames = vec![
+            image::RgbImage::new(2, 2),
+            image::RgbImage::from_pixel(2, 2, image::Rgb([9, 9, 9])),
+        ];
+        let mut source = MemorySource::new(frames, 10.0, 5)
+            .expect("frames")
+            .failing_at(3);
         let mut seen = Vec::new();
         let error = loop {
             match source.next_frame() {
@@ -138,7 +160,10 @@ mod tests {
                 Err(e) => break Some(e),
             }
         };
-        assert_eq!(seen.iter().map(|s| (s.0, s.1)).collect::<Vec<_>>(), [(0, 0), (1, 9), (2, 0)]);
+        assert_eq!(
+            seen.iter().map(|s| (s.0, s.1)).collect::<Vec<_>>(),
+            [(0, 0), (1, 9), (2, 0)]
+        );
         assert_eq!(seen[2].2, Duration::from_millis(200));
         assert!(error.is_some_and(|e| e.to_string().contains("dequeue")));
         assert!(matches!(source.next_frame(), Ok(None)));

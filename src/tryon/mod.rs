@@ -334,12 +334,12 @@ impl ClothStage {
             GarmentChoice::Procedural(kind) => {
                 GarmentMesh::generate(*kind, &rig, &self.options.garment_params())?
             }
-            GarmentChoice::Obj(path) => crate::cloth::obj::load_garment(path, &rig).map_err(|e| {
-                TryOnError::Obj {
+            GarmentChoice::Obj(path) => {
+                crate::cloth::obj::load_garment(path, &rig).map_err(|e| TryOnError::Obj {
                     path: path.clone(),
                     message: e.to_string(),
-                }
-            })?,
+                })?
+            }
         };
         let cloth = Cloth::new(
             &mesh,

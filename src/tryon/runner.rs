@@ -21,14 +21,16 @@ use std::time::Instant;
 use image::RgbImage;
 
 use crate::camera::Camera;
+use crate::mask::Mask;
 use crate::pipeline::{PoseFrame, PosePipeline};
 use crate::pose::smoothing::PoseFilter;
-use crate::mask::Mask;
 use crate::queue::{Full, StageQueue};
 use crate::segment::Segmenter;
 use crate::source::{FrameSource, SourceError};
 
-use super::{ClothFrame, ClothStage, ClothStatus, GarmentChoice, Overlays, PoseOverlay, RenderStage};
+use super::{
+    ClothFrame, ClothStage, ClothStatus, GarmentChoice, Overlays, PoseOverlay, RenderStage,
+};
 
 /// Settings the user changes while the pipeline runs (the live window's keys, signals).
 #[derive(Debug, Default)]
@@ -57,7 +59,10 @@ impl Controls {
     }
 
     pub fn set_overlays(&self, o: Overlays) {
-        let bits = o.mask as u8 | (o.markers as u8) << 1 | (o.skeleton as u8) << 2 | (o.timings as u8) << 3;
+        let bits = o.mask as u8
+            | (o.markers as u8) << 1
+            | (o.skeleton as u8) << 2
+            | (o.timings as u8) << 3;
         self.overlays.store(bits, Ordering::Relaxed);
     }
 
@@ -128,7 +133,13 @@ pub struct PoseStage {
 }
 
 impl PoseStage {
-    fn process(&mut self, image: &RgbImage, mask: Option<&Mask>, camera: &Camera, time_s: f64) -> PoseFrame {
+    fn process(
+        &mut self,
+        image: &RgbImage,
+        mask: Option<&Mask>,
+        camera: &Camera,
+        time_s: f64,
+    ) -> PoseFrame {
         let mut pose = self.pipeline.process(image, camera, mask);
         if let Some(filter) = &mut self.filter {
             if pose.person {
@@ -241,7 +252,8 @@ pub fn run(
                 }) = input.pop()
                 {
                     let time = captured.timestamp_s;
-                    let mut pose = pose_stage.process(&captured.image, mask.as_ref(), &camera, time);
+                    let mut pose =
+                        pose_stage.process(&captured.image, mask.as_ref(), &camera, time);
                     if mask.is_some() {
                         pose.times.segment = segment_ms;
                     }
@@ -326,7 +338,9 @@ pub fn run(
                     let text = timing_lines(&last_times);
                     let mut image = captured.image;
                     let (render, composite) = render_stage
-                        .draw(&mut image, &camera, &cloth, &overlay, overlays, &text, &lines)
+                        .draw(
+                            &mut image, &camera, &cloth, &overlay, overlays, &text, &lines,
+                        )
                         .unwrap_or((0.0, 0.0));
                     let times = FrameTimes {
                         segment: pose.times.segment,
@@ -362,9 +376,9 @@ pub fn run(
                 controls.stop.store(true, Ordering::Relaxed);
             }
         }
-        let (skipped, error) = capture.join().unwrap_or_else(|_| {
-            (Vec::new(), Some("the capture thread panicked".to_owned()))
-        });
+        let (skipped, error) = capture
+            .join()
+            .unwrap_or_else(|_| (Vec::new(), Some("the capture thread panicked".to_owned())));
         summary.skipped = skipped;
         summary.source_error = error;
     });

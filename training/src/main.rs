@@ -663,7 +663,9 @@ fn evaluate(
             for (filter, variant) in filters.iter_mut().zip(variants.iter_mut()) {
                 let mut filtered = result.frame.clone();
                 filter.apply(index as f64 * frame_time, &mut filtered);
-                variant.3.add(&layout, dataset.motion.frame(index), &filtered);
+                variant
+                    .3
+                    .add(&layout, dataset.motion.frame(index), &filtered);
             }
             // The regressor's skeleton is one subject's; compare root positions in the world frame.
             let truth_root = root_of(dataset.motion.frame(index));
