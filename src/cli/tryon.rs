@@ -184,9 +184,7 @@ impl TimingLog {
     }
 
     fn median(&self, f: impl Fn(&FrameTimes) -> f64) -> f64 {
-        let mut v: Vec<f64> = self.frames.iter().map(f).collect();
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied().unwrap_or(0.0)
+        super::median(&self.frames.iter().map(f).collect::<Vec<_>>())
     }
 
     /// "stage median ms" lines.
@@ -647,10 +645,6 @@ pub fn drape(
     }
     bar.finish_and_clear();
     preview.finish()?;
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied().unwrap_or(0.0)
-    };
     let worst = |f: fn(&suitcap::cloth::solver::FrameQuality) -> f32| {
         quality.iter().map(f).fold(0.0f32, f32::max)
     };
@@ -679,8 +673,8 @@ pub fn drape(
     );
     println!(
         "time: cloth {:.2} ms, render + composite {:.2} ms per frame (medians)",
-        median(&mut cloth_ms),
-        median(&mut render_ms)
+        super::median(&cloth_ms),
+        super::median(&render_ms)
     );
     Ok(())
 }
