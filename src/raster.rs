@@ -11,24 +11,31 @@
 //!
 //! Coverage is defined by the f32 edge function [`edge`] of each of the three edges at the pixel
 //! centre `(x + 0.5, y + 0.5)`: a pixel is covered when all three are positive, or zero on a top or
-//! left edge. The rasterizer never tests pixels one by one against that rule. Instead, per row of the
-//! bounding box:
+//! left edge. The rasterizer draws exactly those pixels, but does not test them one by one. Per row
+//! of the bounding box:
 //!
 //! 1. **Span.** Along a row each rounded edge function is monotone in x (every operation in it rounds
 //!    a monotone function of x), so each edge admits a half-line of pixels and the three together an
-//!    interval `[start, end)`. Each edge's end of it is estimated analytically (where the edge
-//!    function crosses zero) and then confirmed with the exact per-pixel test on both sides of the
-//!    estimate, stepping a pixel at a time if rounding put it off ([`Edge::limits`]). Empty rows cost
-//!    a handful of evaluations; the span is exactly the pixel set the per-pixel test would accept.
-//! 2. **Depth.** Inside the span `1/z` is linear in screen space: `1/z = Σ λᵢ/zᵢ` with `λᵢ = eᵢ /
-//!    area`. The edge values `eᵢ` are evaluated as in the coverage test and multiplied by the
-//!    per-triangle constants `1 / (area · zᵢ)` (no division per pixel). Fragments clearly behind the
-//!    stored depth (`(1/z) · stored < 1 − 2⁻²⁰`) are rejected with one multiplication; the others
-//!    get `z = 1 / (1/z)`, the one division per fragment, and the usual `z < stored` test.
-//! 3. **Weights** `wᵢ = (λᵢ/zᵢ) · z`, perspective-correct, only for fragments that pass.
+//!    interval `[start, end)`. Each edge's end of it is computed analytically, `⌊ax + 0.5 + row /
+//!    dy⌋` where the edge function crosses zero, and used as is when a rounding-error bound shows the
+//!    nearest pixel centres are safely on their sides ([`Edge::boundary`]). Otherwise (a vertex or
+//!    edge through a pixel centre, horizontal edges, the fill-rule ties) the boundary is found by
+//!    stepping from the estimate with the exact per-pixel test ([`Edge::walk`]). Either way the span
+//!    is exactly the pixel set the per-pixel test accepts; pixels outside it cost nothing.
+//! 2. **Depth.** `1/z = Σ λᵢ/zᵢ` (`λᵢ = eᵢ / area`) is linear in screen space. At the span's first
+//!    pixel it is evaluated from the exact edge values, as `min 1/zᵢ + Σ eᵢ · (1/zᵢ − min 1/zᵢ) /
+//!    area` (non-negative terms, so no cancellation, and exactly `z` for a triangle of constant
+//!    depth); along the span it is `1/z₀ + n · d(1/z)/dx` for the n-th pixel (no accumulation, no
+//!    division). Fragments clearly behind the stored depth (`(1/z) · stored < 1 − 2⁻²⁰`) are
+//!    rejected with one multiplication; the others get `z = 1 / (1/z)`, the only division per
+//!    fragment, and the usual `z < stored` test.
+//! 3. **Weights** `wᵢ = eᵢ · (1 / (zᵢ · area)) · z` (perspective-correct), with `eᵢ` stepped from the
+//!    span's start, only for fragments that pass.
 //!
-//! Inputs outside the ranges where these steps cannot overflow or lose the result (coordinates
-//! beyond ±10¹⁸ pixels, absurd depths) fall back to testing every pixel of the bounding box.
+//! The reciprocals `1/area`, `1/zᵢ` and `1/dyᵢ` are taken once per triangle. Inputs outside the
+//! ranges where these steps cannot overflow or lose the result (coordinates beyond ±10¹⁸ pixels,
+//! absurd depths, buffers wider than 2²² pixels) fall back to testing every pixel of the bounding
+//! box.
 
 use crate::camera::Projected;
 
@@ -132,6 +139,23 @@ fn is_top_left(ax: f32, ay: f32, bx: f32, by: f32) -> bool {
     (ay == by && bx > ax) || by < ay
 }
 
+/// The pixel columns `[lo, hi)` of a row as the bounds `lo − 0.5`, `hi + 0.5` for
+/// [`Edge::boundary`]'s clamping.
+#[derive(Clone, Copy, Debug)]
+struct Row {
+    below: f32,
+    above: f32,
+}
+
+impl Row {
+    fn new(lo: u32, hi: u32) -> Row {
+        Row {
+            below: lo as f32 - 0.5,
+            above: hi as f32 + 0.5,
+        }
+    }
+}
+
 /// One edge a→b of a positively wound triangle, set up for row-by-row evaluation of [`edge`].
 #[derive(Clone, Copy, Debug)]
 struct Edge {
@@ -144,6 +168,12 @@ struct Edge {
     inv_dy: f32,
     /// `ax + 0.5`
     ax_half: f32,
+    /// `|ax| + 2`
+    abs_ax_2: f32,
+    /// 0 when the edge bounds a row's span on the left (`dy < 0`), else +∞.
+    left: f32,
+    /// 0 when the edge bounds a row's span on the right (`dy > 0`), else +∞.
+    right: f32,
     top_left: bool,
 }
 
@@ -157,6 +187,9 @@ impl Edge {
             dy,
             inv_dy: 1.0 / dy,
             ax_half: a.x + 0.5,
+            abs_ax_2: a.x.abs() + 2.0,
+            left: if dy < 0.0 { 0.0 } else { f32::INFINITY },
+            right: if dy > 0.0 { 0.0 } else { f32::INFINITY },
             top_left: is_top_left(a.x, a.y, b.x, b.y),
         }
     }
@@ -191,17 +224,23 @@ impl Edge {
     /// rounding cannot have moved it ([`Edge::boundary`]); otherwise, as when a vertex or edge
     /// passes through a pixel centre, the boundary is found with the exact per-pixel test
     /// ([`Edge::walk`]). Either way the result is exactly the set of pixels the per-pixel test
-    /// accepts. The three edges of a row are independent, so their work overlaps.
+    /// accepts.
     #[inline]
     fn limits(&self, row: f32, lo: u32, hi: u32) -> (u32, u32) {
-        match self.boundary(row, lo, hi) {
-            Some(x) if self.dy > 0.0 => (lo, x),
-            Some(x) => (x, hi),
-            None => self.walk(row, lo, hi),
+        let (x, certain) = self.boundary(row, Row::new(lo, hi));
+        if !certain {
+            return self.walk(row, lo, hi);
+        }
+        let x = (x.max(lo as f32).min(hi as f32)) as u32;
+        if self.dy > 0.0 {
+            (lo, x)
+        } else {
+            (x, hi)
         }
     }
 
-    /// The boundary pixel in `[lo, hi]` from the analytic crossing, if rounding cannot have moved it.
+    /// The boundary pixel `⌊p⌋` (as a float, within a pixel of the row `[lo, hi]`) from the analytic
+    /// crossing, and whether rounding cannot have moved it.
     ///
     /// With `u = 2⁻²⁴`, the estimate `p = (ax + 0.5) + row · (1/dy)` is within about `5u(|ax| +
     /// |q| + 1)` (`q = row/dy`) of the true `crossing + 0.5`, and the rounded edge function at a
@@ -209,21 +248,21 @@ impl Edge {
     /// is farther than `δ = 2⁻¹⁹(|ax| + |q| + 2)` from every integer (the two pixel centres next to
     /// the crossing are farther from it than those errors), `⌊p⌋` is exact. Estimates outside the
     /// row are clamped to half a pixel outside it, where the same holds. Horizontal edges (infinite
-    /// or NaN `q`) always take the exact path.
+    /// or NaN `q`) are never certain.
     #[inline]
-    fn boundary(&self, row: f32, lo: u32, hi: u32) -> Option<u32> {
+    fn boundary(&self, row: f32, span: Row) -> (f32, bool) {
+        // Adding and subtracting 1.5 · 2²³ rounds to the nearest integer (|p| < 2²²).
+        const ROUND: f32 = 12_582_912.0;
         let q = row * self.inv_dy;
-        let p = (self.ax_half + q).max(lo as f32 - 0.5).min(hi as f32 + 0.5);
-        let delta = (self.ax.abs() + q.abs() + 2.0) * (1.0 / (1 << 19) as f32);
-        // ⌊p⌋ without a libm call (p ≥ −0.5).
-        let t = p as i32;
-        let floor = t - i32::from(t as f32 > p);
-        let frac = p - floor as f32;
-        if delta < 0.25 && frac > delta && frac < 1.0 - delta {
-            Some((floor.max(0) as u32).clamp(lo, hi))
-        } else {
-            None
-        }
+        let p = self.ax_half + q;
+        // Clamp (a NaN p fails both comparisons and becomes `lo − 0.5`).
+        let p = if p > span.below { p } else { span.below };
+        let p = if p < span.above { p } else { span.above };
+        let nearest = (p + ROUND) - ROUND;
+        let off = p - nearest; // exact, in [−0.5, 0.5]
+        let floor = if off < 0.0 { nearest - 1.0 } else { nearest };
+        let delta = (self.abs_ax_2 + q.abs()) * (1.0 / (1 << 19) as f32);
+        (floor, delta < 0.25 && off.abs() > delta)
     }
 
     /// [`Edge::limits`] by testing pixels one by one, starting at the analytic estimate.
@@ -270,6 +309,22 @@ impl Edge {
     }
 }
 
+/// `⌊x⌋` of `x` clamped to `[−1, limit + 1]` (`f32::floor` is a libm call on baseline x86-64).
+#[inline]
+fn floor_within(x: f32, limit: f32) -> i64 {
+    let x = x.max(-1.0).min(limit + 1.0);
+    let t = x as i64;
+    t - i64::from(t as f32 > x)
+}
+
+/// `⌈x⌉` of `x` clamped to `[−1, limit + 1]`.
+#[inline]
+fn ceil_within(x: f32, limit: f32) -> i64 {
+    let x = x.max(-1.0).min(limit + 1.0);
+    let t = x as i64;
+    t + i64::from((t as f32) < x)
+}
+
 /// Rasterizes one triangle. Triangles with a vertex nearer than `near` (or not finite) are skipped.
 /// `shade` is called for every covered pixel nearer than the depth buffer, which is then updated.
 pub fn draw_triangle(
@@ -300,33 +355,14 @@ pub fn draw_triangle(
     } else {
         ([a, c, b], [0, 2, 1])
     };
+    let area_positive = area > 0.0;
     let area = area.abs();
 
     let (w, h) = (buffer.width as f32, buffer.height as f32);
-    let min_x = v
-        .iter()
-        .map(|p| p.x)
-        .fold(f32::INFINITY, f32::min)
-        .floor()
-        .max(0.0);
-    let max_x = v
-        .iter()
-        .map(|p| p.x)
-        .fold(f32::NEG_INFINITY, f32::max)
-        .ceil()
-        .min(w);
-    let min_y = v
-        .iter()
-        .map(|p| p.y)
-        .fold(f32::INFINITY, f32::min)
-        .floor()
-        .max(0.0);
-    let max_y = v
-        .iter()
-        .map(|p| p.y)
-        .fold(f32::NEG_INFINITY, f32::max)
-        .ceil()
-        .min(h);
+    let min_x = floor_within(a.x.min(b.x).min(c.x), w).max(0);
+    let max_x = ceil_within(a.x.max(b.x).max(c.x), w).min(buffer.width as i64);
+    let min_y = floor_within(a.y.min(b.y).min(c.y), h).max(0);
+    let max_y = ceil_within(a.y.max(b.y).max(c.y), h).min(buffer.height as i64);
     if min_x >= max_x || min_y >= max_y {
         return;
     }
@@ -346,7 +382,12 @@ pub fn draw_triangle(
     let inv_area = 1.0 / area;
     let base = inv_depth[0].min(inv_depth[1]).min(inv_depth[2]);
     let spans = Spans {
-        edges: order.map(|k| edges[k]),
+        top: inv_depth[0].max(inv_depth[1]).max(inv_depth[2]),
+        edges: if area_positive {
+            edges
+        } else {
+            [edges[0], edges[2], edges[1]]
+        },
         base,
         rise: inv_depth.map(|d| (d - base) * inv_area),
         scale: inv_depth.map(|d| d * inv_area),
@@ -354,7 +395,8 @@ pub fn draw_triangle(
     };
     // Within these limits no edge function, weight or depth can overflow, underflow to zero or
     // become NaN, and every 1/z is positive.
-    let sane = v.iter().all(|p| p.x.abs() <= 1e18 && p.y.abs() <= 1e18)
+    let sane = buffer.width < 1 << 22
+        && v.iter().all(|p| p.x.abs() <= 1e18 && p.y.abs() <= 1e18)
         && spans.scale.iter().all(|&s| (1e-30..=1e30).contains(&s));
     if sane {
         spans.draw(buffer, bounds, shade);
@@ -365,7 +407,12 @@ pub fn draw_triangle(
             order,
             front_facing,
         };
-        tri.draw_each_pixel(buffer, bounds, order.map(|k| inv_depth[k]), shade);
+        let inv_depth = [
+            inv_depth[order[0]],
+            inv_depth[order[1]],
+            inv_depth[order[2]],
+        ];
+        tri.draw_each_pixel(buffer, bounds, inv_depth, shade);
     }
 }
 
@@ -385,6 +432,8 @@ struct Bounds {
 struct Spans {
     edges: [Edge; 3],
     base: f32,
+    /// The largest `1/zᵢ`: with `base`, the range every `1/z` inside the triangle lies in.
+    top: f32,
     rise: [f32; 3],
     scale: [f32; 3],
     front_facing: bool,
@@ -397,33 +446,68 @@ impl Spans {
         let Spans {
             edges: [e0, e1, e2],
             base,
+            top,
             rise: [g0, g1, g2],
             scale: [s0, s1, s2],
             front_facing,
         } = *self;
+        let max = |a: f32, b: f32| if a > b { a } else { b };
+        let min = |a: f32, b: f32| if a < b { a } else { b };
         let width = buffer.width as usize;
         let (lo, hi) = bounds.x;
+        let (lo_f, hi_f) = (lo as f32, hi as f32);
+        let row = Row::new(lo, hi);
+        // d(1/z)/dx; the base cancels as Σ dyᵢ = 0.
+        let dz = -(e0.dy * g0 + e1.dy * g1 + e2.dy * g2);
         for py in bounds.y.0..bounds.y.1 {
             let cy = py as f32 + 0.5;
             let (r0, r1, r2) = (e0.row(cy), e1.row(cy), e2.row(cy));
-            let (l0, l1, l2) = (
-                e0.limits(r0, lo, hi),
-                e1.limits(r1, lo, hi),
-                e2.limits(r2, lo, hi),
+            let (b0, b1, b2) = (
+                e0.boundary(r0, row),
+                e1.boundary(r1, row),
+                e2.boundary(r2, row),
             );
-            let start = l0.0.max(l1.0).max(l2.0);
-            let end = l0.1.min(l1.1).min(l2.1);
-            if start >= end {
-                continue;
-            }
+            let (start, end) = if b0.1 & b1.1 & b2.1 {
+                // Each edge bounds one side: the other side's offset is +∞.
+                let start = max(
+                    max(lo_f, b0.0 - e0.left),
+                    max(b1.0 - e1.left, b2.0 - e2.left),
+                );
+                let end = min(
+                    min(hi_f, b0.0 + e0.right),
+                    min(b1.0 + e1.right, b2.0 + e2.right),
+                );
+                if start >= end {
+                    continue;
+                }
+                (start as u32, end as u32)
+            } else {
+                let (l0, l1, l2) = (
+                    e0.limits(r0, lo, hi),
+                    e1.limits(r1, lo, hi),
+                    e2.limits(r2, lo, hi),
+                );
+                let start = l0.0.max(l1.0).max(l2.0);
+                let end = l0.1.min(l1.1).min(l2.1);
+                if start >= end {
+                    continue;
+                }
+                (start, end)
+            };
             let row_start = py as usize * width;
             let depths = &mut buffer.depth[row_start + start as usize..row_start + end as usize];
-            let mut cx = start as f32 + 0.5; // exact: pixel coordinates stay far below 2²³
+            // The edge functions at the span's first pixel, exactly as the coverage test has them;
+            // along the row they fall by dyᵢ per pixel, and 1/z changes by `dz`.
+            let cx = start as f32 + 0.5;
+            let (a0, a1, a2) = (e0.at(r0, cx), e1.at(r1, cx), e2.at(r2, cx));
+            let z0 = base + (a0 * g0 + a1 * g1 + a2 * g2);
+            let mut n = 0.0f32; // pixels from the span's start (exact)
             for (px, stored) in (start..end).zip(depths) {
-                // The same edge functions as the coverage test.
-                let (w0, w1, w2) = (e0.at(r0, cx), e1.at(r1, cx), e2.at(r2, cx));
-                cx += 1.0;
-                let inv_z = base + (w0 * g0 + w1 * g1 + w2 * g2);
+                // Kept within the vertices' range, which rounding might leave by an ulp (so 1/z
+                // stays positive, as the per-pixel evaluation's sum of non-negative terms is).
+                let inv_z = min(max(z0 + dz * n, base), top);
+                let step = n;
+                n += 1.0;
                 // Cheap rejection without dividing: inv_z · stored < 1 − 2⁻²⁰ means the rounded
                 // depth 1 / inv_z is certainly ≥ stored.
                 if inv_z * *stored < 1.0 - 1.0 / (1 << 20) as f32 {
@@ -434,6 +518,13 @@ impl Spans {
                     continue;
                 }
                 *stored = depth;
+                // λᵢ · area, not below 0 (where an edge passes through the span's last pixels,
+                // stepping may round an exact 0 to a tiny negative value).
+                let (w0, w1, w2) = (
+                    max(a0 - e0.dy * step, 0.0),
+                    max(a1 - e1.dy * step, 0.0),
+                    max(a2 - e2.dy * step, 0.0),
+                );
                 shade(Fragment {
                     x: px,
                     y: py,
@@ -871,7 +962,8 @@ mod tests {
         /// The relative rounding error float evaluation of the barycentric weights can have at
         /// pixel `(x, y)`, beyond the usual few ulps: the edge functions are differences of
         /// products, so their error scales with the size of those products against the area (large
-        /// for slivers and for far-away vertices; both rasterizers inherit it).
+        /// for slivers and for far-away vertices; both rasterizers inherit it), and 1/z mixes
+        /// the vertices' 1/zᵢ, so its relative error grows with their ratio.
         fn rounding(tri: [ScreenVertex; 3], x: u32, y: u32) -> f32 {
             let (cx, cy) = (x as f64 + 0.5, y as f64 + 0.5);
             let p = tri.map(|v| (v.x as f64, v.y as f64));
@@ -884,7 +976,10 @@ mod tests {
                     ((b.0 - a.0) * (cy - a.1)).abs() + ((b.1 - a.1) * (cx - a.0)).abs()
                 })
                 .sum();
-            (8.0 * f32::EPSILON as f64 * terms / area) as f32
+            let depths = tri.map(|v| v.depth as f64);
+            let ratio = depths.iter().fold(0.0f64, |m, &d| m.max(d))
+                / depths.iter().fold(f64::INFINITY, |m, &d| m.min(d));
+            (8.0 * f32::EPSILON as f64 * (terms / area) * ratio) as f32
         }
 
         fn close(a: f32, b: f32, relative: f32) -> bool {
@@ -946,7 +1041,7 @@ mod tests {
                 let rows = (a.y.min(b.y).floor().max(0.0) as u32)..(a.y.max(b.y).ceil().max(0.0) as u32);
                 for py in rows.take(200) {
                     let row = e.row(py as f32 + 0.5);
-                    if e.boundary(row, lo, hi).is_some() {
+                    if e.boundary(row, Row::new(lo, hi)).1 {
                         prop_assert_eq!(e.limits(row, lo, hi), e.walk(row, lo, hi), "{:?} row {}", e, py);
                     }
                 }
