@@ -1121,8 +1121,10 @@ fn skirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentErro
     Ok(finish(rest, "skirt", b, anchors, params.ease_cm))
 }
 
-/// How far the dress's waist may move from its place on the hip bone, cm.
-pub const DRESS_WAIST_SLACK_CM: f32 = 2.5;
+/// How far the dress's waist may move from its place on the hip bone, cm. With 2.5 cm the kick
+/// (CMU 10_03), whose spine arches further than a walk's, left the bodice front 5.1 % strained at
+/// the 95th percentile in its worst frame (4,000 vertices, live settings); with 4 cm, 4.2 %.
+pub const DRESS_WAIST_SLACK_CM: f32 = 4.0;
 
 fn dress(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentError> {
     let abdomen = rest.joint_position("abdomen")?;
