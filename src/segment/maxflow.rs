@@ -339,6 +339,58 @@ fn push_short(nodes: &mut [Node], i: usize, j: usize, d: usize) {
     nj.tr = trj + delta;
 }
 
+/// Writes row `y` of `g` into `cells` (the row's nodes in the padded grid): residual capacities
+/// towards the four neighbours (zero towards the padding) and the cancelled terminal capacity.
+/// Simple passes over slices, so the compiler needs no bounds checks.
+fn fill_row(cells: &mut [Node], g: &GridGraph, y: usize) {
+    let (w, h) = (g.width, g.height);
+    let src = &g.source[y * w..(y + 1) * w];
+    let snk = &g.sink[y * w..(y + 1) * w];
+    for ((n, &s), &t) in cells.iter_mut().zip(src).zip(snk) {
+        *n = Node {
+            tr: s - t,
+            dist: 0,
+            tree: FREE,
+            parent: NO_PARENT,
+            ..Node::default()
+        };
+    }
+    let right = &g.right[y * (w - 1)..(y + 1) * (w - 1)];
+    for (n, &c) in cells.iter_mut().zip(right) {
+        n.cap[1] = c;
+    }
+    for (n, &c) in cells[1..].iter_mut().zip(right) {
+        n.cap[0] = c;
+    }
+    if y > 0 {
+        for (n, &c) in cells.iter_mut().zip(&g.down[(y - 1) * w..y * w]) {
+            n.cap[2] = c;
+        }
+    }
+    if y + 1 < h {
+        for (n, &c) in cells.iter_mut().zip(&g.down[y * w..(y + 1) * w]) {
+            n.cap[3] = c;
+        }
+    }
+}
+
+/// Whether root `i` touches, through a residual edge in its tree's direction, a node outside its
+/// tree (free nodes in the padding count; their edges have zero capacity). Branch-free: the trees of
+/// neighbouring roots are noise-like.
+#[inline(always)]
+fn touches_other_tree(nodes: &mut [Node], i: usize, off: &[isize; 4]) -> bool {
+    let ni = *at(nodes, i);
+    let (is_src, is_snk) = (ni.tree == SRC, ni.tree == SNK);
+    let mut act = false;
+    for d in 0..4 {
+        let nj = *at(nodes, (i as isize + off[d]) as usize);
+        // Tree residual: out of i in the source tree, into i in the sink tree.
+        let res = (is_src & (ni.cap[d] > 0.0)) | (is_snk & (nj.cap[d ^ 1] > 0.0));
+        act |= res & (nj.tree != ni.tree);
+    }
+    act
+}
+
 /// FIFO of node indices in a ring buffer that always keeps one free slot, so a conditional push can
 /// write unconditionally.
 #[derive(Debug, Default)]
@@ -618,32 +670,7 @@ impl GridMaxFlow {
         for y in 0..h + 2 {
             if y < h {
                 let row = (y + 1) * stride + 1;
-                let src = &g.source[y * w..(y + 1) * w];
-                let snk = &g.sink[y * w..(y + 1) * w];
-                for (x, n) in nodes[row..row + w].iter_mut().enumerate() {
-                    let (s, t) = (src[x], snk[x]);
-                    let left = if x > 0 {
-                        g.right[y * (w - 1) + x - 1]
-                    } else {
-                        0.0
-                    };
-                    let right = if x + 1 < w {
-                        g.right[y * (w - 1) + x]
-                    } else {
-                        0.0
-                    };
-                    let up = if y > 0 { g.down[(y - 1) * w + x] } else { 0.0 };
-                    let down = if y + 1 < h { g.down[y * w + x] } else { 0.0 };
-                    *n = Node {
-                        cap: [left, right, up, down],
-                        tr: s - t,
-                        ts: 0,
-                        dist: 0,
-                        tree: FREE,
-                        parent: NO_PARENT,
-                        in_queue: 0,
-                    };
-                }
+                fill_row(&mut nodes[row..row + w], g, y);
                 if prepass {
                     // Even edges, then odd ones: the pushes of one pass touch disjoint node pairs, so
                     // they do not wait on each other.
@@ -677,19 +704,7 @@ impl GridMaxFlow {
             if y >= 2 {
                 let row = (y - 1) * stride + 1;
                 for i in row..row + w {
-                    let ni = *at(nodes, i);
-                    let mut act = false;
-                    for d in 0..4 {
-                        let nj = *at(nodes, (i as isize + off[d]) as usize);
-                        // Tree residual: out of i in the source tree, into i in the sink tree.
-                        let res = if ni.tree == SRC {
-                            ni.cap[d]
-                        } else {
-                            nj.cap[d ^ 1]
-                        };
-                        act |= (res > 0.0) & (nj.tree != ni.tree);
-                    }
-                    act &= ni.tree != FREE;
+                    let act = touches_other_tree(nodes, i, &off);
                     at(nodes, i).in_queue = act as u8;
                     active.push_if(i as u32, act);
                 }
