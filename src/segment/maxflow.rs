@@ -562,6 +562,8 @@ pub struct GridMaxFlow {
     nodes: Vec<Node>,
     active: Fifo,
     orphans: Fifo,
+    /// Scratch list of the nodes on the current augmenting path.
+    path: Vec<u32>,
     stride: usize,
     dims: (usize, usize),
     stats: SolveStats,
@@ -581,6 +583,7 @@ impl GridMaxFlow {
             nodes: Vec::new(),
             active: Fifo::new(),
             orphans: Fifo::new(),
+            path: Vec::new(),
             stride: 0,
             dims: (0, 0),
             stats: SolveStats::default(),
@@ -818,81 +821,84 @@ impl GridMaxFlow {
 
     /// Pushes the bottleneck along source-root → s → t → sink-root; collects saturated tree edges'
     /// children as orphans.
+    ///
+    /// The first pass chases the parent links of both sides and records the nodes in `path`; the
+    /// second pass updates the residuals from that list, so its iterations do not wait on each other.
     #[inline(never)]
     fn augment(&mut self, s: usize, t: usize, d: usize, off: &[isize; 4]) {
         let nodes = &mut self.nodes;
         let orphans = &mut self.orphans;
-        let mut steps = 0u64;
+        let path = &mut self.path;
+        path.clear();
         let mut b = at(nodes, s).cap[d];
         // Source side: edge parent → u has residual at(nodes, parent).cap[(p ^ 1) & 3].
         let mut u = s;
         loop {
+            path.push(u as u32);
             let p = at(nodes, u).parent as usize;
             if p == TERMINAL as usize {
                 break;
             }
             let par = (u as isize + off[p & 3]) as usize;
             b = fmin(b, at(nodes, par).cap[(p ^ 1) & 3]);
-            steps += 1;
             u = par;
         }
         b = fmin(b, at(nodes, u).tr);
+        let split = path.len();
         // Sink side: edge u → parent has residual at(nodes, u).cap[p & 3].
         let mut u = t;
         loop {
+            path.push(u as u32);
             let p = at(nodes, u).parent as usize;
             if p == TERMINAL as usize {
                 break;
             }
             b = fmin(b, at(nodes, u).cap[p & 3]);
-            steps += 1;
             u = (u as isize + off[p & 3]) as usize;
         }
         b = fmin(b, -at(nodes, u).tr);
 
         at(nodes, s).cap[d] -= b;
         at(nodes, t).cap[d ^ 1] += b;
-        let mut u = s;
-        loop {
+        let (src_side, snk_side) = path.split_at(split);
+        for pair in src_side.windows(2) {
+            let (u, par) = (pair[0] as usize, pair[1] as usize);
             let p = at(nodes, u).parent as usize;
-            if p == TERMINAL as usize {
-                at(nodes, u).tr -= b;
-                if at(nodes, u).tr == 0.0 {
-                    at(nodes, u).parent = ORPHAN;
-                    orphans.push(u as u32);
-                }
-                break;
-            }
-            let par = (u as isize + off[p & 3]) as usize;
             at(nodes, par).cap[(p ^ 1) & 3] -= b;
             at(nodes, u).cap[p & 3] += b;
             if at(nodes, par).cap[(p ^ 1) & 3] == 0.0 {
                 at(nodes, u).parent = ORPHAN;
                 orphans.push(u as u32);
             }
-            u = par;
         }
-        let mut u = t;
-        loop {
-            let p = at(nodes, u).parent as usize;
-            if p == TERMINAL as usize {
-                at(nodes, u).tr += b;
-                if at(nodes, u).tr == 0.0 {
-                    at(nodes, u).parent = ORPHAN;
-                    orphans.push(u as u32);
-                }
-                break;
+        if let Some(&root) = src_side.last() {
+            let n = at(nodes, root as usize);
+            n.tr -= b;
+            if n.tr == 0.0 {
+                n.parent = ORPHAN;
+                orphans.push(root);
             }
-            let par = (u as isize + off[p & 3]) as usize;
+        }
+        for pair in snk_side.windows(2) {
+            let (u, par) = (pair[0] as usize, pair[1] as usize);
+            let p = at(nodes, u).parent as usize;
             at(nodes, u).cap[p & 3] -= b;
             at(nodes, par).cap[(p ^ 1) & 3] += b;
             if at(nodes, u).cap[p & 3] == 0.0 {
                 at(nodes, u).parent = ORPHAN;
                 orphans.push(u as u32);
             }
-            u = par;
         }
-        self.stats.path_edges += 2 * steps;
+        if let Some(&root) = snk_side.last() {
+            let n = at(nodes, root as usize);
+            n.tr += b;
+            if n.tr == 0.0 {
+                n.parent = ORPHAN;
+                orphans.push(root);
+            }
+        }
+        // Both sides hold at least their start node; each further node is one tree edge.
+        self.stats.path_edges += 2 * (path.len() as u64 - 2);
     }
 
     /// Adoption stage: finds each orphan a new parent with a valid origin in its own tree, or frees it.
