@@ -391,6 +391,110 @@ fn touches_other_tree(nodes: &mut [Node], i: usize, off: &[isize; 4]) -> bool {
     act
 }
 
+/// Rows routed together by [`push_along_rows`] (one SIMD lane each).
+const ROW_BATCH: usize = 8;
+type Lanes = [f32; ROW_BATCH];
+
+/// Scratch for [`push_along_rows`]: per column, one lane per row of the batch.
+#[derive(Debug, Default)]
+struct RowScratch {
+    tr: Vec<Lanes>,
+    left: Vec<Lanes>,
+    right: Vec<Lanes>,
+    demand: Vec<Lanes>,
+}
+
+/// Saturates, within each of the `n <= ROW_BATCH` graph rows from `first`, paths from nodes with
+/// residual source capacity to nodes with residual sink capacity further right, then further left
+/// (a 1-D max-flow pass per row and direction, see [`sweep_lanes`]). The rows are independent, so
+/// they are processed in lock-step, one lane each, which breaks the sweeps' dependency chains.
+fn push_along_rows(
+    nodes: &mut [Node],
+    stride: usize,
+    w: usize,
+    first: usize,
+    n: usize,
+    s: &mut RowScratch,
+) {
+    if w < 2 {
+        return;
+    }
+    for v in [&mut s.tr, &mut s.left, &mut s.right] {
+        v.clear();
+        v.resize(w, [0.0; ROW_BATCH]);
+    }
+    s.demand.clear();
+    s.demand.resize(w + 1, [0.0; ROW_BATCH]);
+    for lane in 0..n {
+        let start = (first + lane + 1) * stride + 1;
+        for (x, node) in nodes[start..start + w].iter().enumerate() {
+            s.tr[x][lane] = node.tr;
+            s.left[x][lane] = node.cap[0];
+            s.right[x][lane] = node.cap[1];
+        }
+    }
+    // Unused lanes are all zero: nothing flows in them.
+    sweep_lanes(&mut s.tr, &mut s.right, &mut s.left, &mut s.demand, false);
+    sweep_lanes(&mut s.tr, &mut s.left, &mut s.right, &mut s.demand, true);
+    for lane in 0..n {
+        let start = (first + lane + 1) * stride + 1;
+        for (x, node) in nodes[start..start + w].iter_mut().enumerate() {
+            node.tr = s.tr[x][lane];
+            node.cap[0] = s.left[x][lane];
+            node.cap[1] = s.right[x][lane];
+        }
+    }
+}
+
+/// One direction of the row pass, for each lane: `fwd[x]` is the residual capacity from column x
+/// to the next column in the sweep (`x + 1`, or `x - 1` if `leftward`), `back[x]` the opposite one.
+///
+/// A backward sweep computes, for each position, the sink capacity reachable from it (its own plus
+/// what the next edge lets through to the rest); a forward sweep then carries flow from node to
+/// node, never more than the rest can absorb. Each step is an ordinary push along a residual edge;
+/// a rounding remainder stays on a node as residual source capacity, which is also a valid state
+/// (the flow is still Σ source − residual source, see [`GridMaxFlow::solve`]).
+fn sweep_lanes(
+    tr: &mut [Lanes],
+    fwd: &mut [Lanes],
+    back: &mut [Lanes],
+    demand: &mut [Lanes],
+    leftward: bool,
+) {
+    let w = tr.len();
+    let pos = |k: usize| if leftward { w - 1 - k } else { k };
+    // demand[k]: sink capacity reachable from the k-th position of the sweep onwards; the edge
+    // out of the last position leads to the padding and has zero capacity.
+    demand[w] = [0.0; ROW_BATCH];
+    for k in (0..w).rev() {
+        let x = pos(k);
+        let next = demand[k + 1];
+        let mut d = [0.0; ROW_BATCH];
+        for l in 0..ROW_BATCH {
+            d[l] = fmax(-tr[x][l], 0.0) + fmin(fwd[x][l], next[l]);
+        }
+        demand[k] = d;
+    }
+    let mut carry = [0.0f32; ROW_BATCH];
+    for k in 0..w {
+        let x = pos(k);
+        let next = demand[k + 1];
+        for l in 0..ROW_BATCH {
+            let t = tr[x][l] + carry[l];
+            let f = fmin(fmin(fmax(t, 0.0), fwd[x][l]), next[l]);
+            tr[x][l] = t - f;
+            fwd[x][l] -= f;
+            carry[l] = f;
+        }
+        if k + 1 < w {
+            let xn = pos(k + 1);
+            for l in 0..ROW_BATCH {
+                back[xn][l] += carry[l];
+            }
+        }
+    }
+}
+
 /// FIFO of node indices in a ring buffer that always keeps one free slot, so a conditional push can
 /// write unconditionally.
 #[derive(Debug, Default)]
@@ -564,6 +668,8 @@ pub struct GridMaxFlow {
     orphans: Fifo,
     /// Scratch list of the nodes on the current augmenting path.
     path: Vec<u32>,
+    /// Scratch for the row passes of the pre-pass.
+    rows: RowScratch,
     stride: usize,
     dims: (usize, usize),
     stats: SolveStats,
@@ -584,6 +690,7 @@ impl GridMaxFlow {
             active: Fifo::new(),
             orphans: Fifo::new(),
             path: Vec::new(),
+            rows: RowScratch::default(),
             stride: 0,
             dims: (0, 0),
             stats: SolveStats::default(),
@@ -669,49 +776,66 @@ impl GridMaxFlow {
         let prepass = self.prepass;
         let nodes = &mut self.nodes;
         let active = &mut self.active;
+        let rows = &mut self.rows;
         let off = [-1isize, 1, -(stride as isize), stride as isize];
-        for y in 0..h + 2 {
-            if y < h {
-                let row = (y + 1) * stride + 1;
-                fill_row(&mut nodes[row..row + w], g, y);
+        // Rows [0, passed) have had the row pass and have their trees; rows [0, activated) are
+        // activated. Row r of the graph is the padded row r + 1.
+        let mut passed = 0;
+        let mut activated = 0;
+        for y in 0..h {
+            let row = (y + 1) * stride + 1;
+            fill_row(&mut nodes[row..row + w], g, y);
+            if prepass {
+                // Even edges, then odd ones: the pushes of one pass touch disjoint node pairs, so
+                // they do not wait on each other.
+                for i in (row..row + w - 1).step_by(2) {
+                    push_short(nodes, i, i + 1, 1);
+                }
+                for i in (row + 1..row + w - 1).step_by(2) {
+                    push_short(nodes, i, i + 1, 1);
+                }
+                if y > 0 {
+                    for i in row..row + w {
+                        push_short(nodes, i - stride, i, 3);
+                    }
+                }
+            }
+            // Rows [0, complete) have seen all their short paths.
+            let complete = if y + 1 == h { h } else { y };
+            if complete - passed < ROW_BATCH && complete < h {
+                continue;
+            }
+            while passed < complete {
+                let n = ROW_BATCH.min(complete - passed);
                 if prepass {
-                    // Even edges, then odd ones: the pushes of one pass touch disjoint node pairs, so
-                    // they do not wait on each other.
-                    for i in (row..row + w - 1).step_by(2) {
-                        push_short(nodes, i, i + 1, 1);
-                    }
-                    for i in (row + 1..row + w - 1).step_by(2) {
-                        push_short(nodes, i, i + 1, 1);
-                    }
-                    if y > 0 {
-                        for i in row..row + w {
-                            push_short(nodes, i - stride, i, 3);
-                        }
+                    push_along_rows(nodes, stride, w, passed, n, rows);
+                }
+                // The terminal residuals of these rows are final: make their roots.
+                for r in passed..passed + n {
+                    let start = (r + 1) * stride + 1;
+                    // Branch-free: the signs of the residuals are noise-like.
+                    for node in &mut nodes[start..start + w] {
+                        let (pos, neg) = ((node.tr > 0.0) as u8, (node.tr < 0.0) as u8);
+                        node.tree = pos * SRC + neg * SNK;
+                        node.parent = NO_PARENT - (pos | neg) * (NO_PARENT - TERMINAL);
+                        node.dist = 1;
                     }
                 }
+                passed += n;
             }
-            // Row y-1 has seen all its edges: its terminal residuals are final.
-            if y >= 1 && y <= h {
-                let row = y * stride + 1;
-                // Branch-free: the signs of the residuals are noise-like.
-                for n in &mut nodes[row..row + w] {
-                    let (pos, neg) = ((n.tr > 0.0) as u8, (n.tr < 0.0) as u8);
-                    n.tree = pos * SRC + neg * SNK;
-                    n.parent = NO_PARENT - (pos | neg) * (NO_PARENT - TERMINAL);
-                    n.dist = 1;
-                }
-            }
-            // Row y-2 and its neighbours have their trees: activate the roots that touch, through a
+            // Rows whose neighbours all have their trees: activate the roots that touch, through a
             // residual edge, a node outside their own tree. A root surrounded by its own tree is
             // passive; adoption re-activates it if a neighbour is freed, as for any passive node.
-            if y >= 2 {
-                let row = (y - 1) * stride + 1;
-                for i in row..row + w {
+            let ready = if passed == h { h } else { passed - 1 };
+            for r in activated..ready {
+                let start = (r + 1) * stride + 1;
+                for i in start..start + w {
                     let act = touches_other_tree(nodes, i, &off);
                     at(nodes, i).in_queue = act as u8;
                     active.push_if(i as u32, act);
                 }
             }
+            activated = activated.max(ready);
         }
     }
 
@@ -1058,6 +1182,64 @@ mod tests {
         assert!((r.flow - 3.0).abs() < 1e-9, "flow {}", r.flow);
         assert_eq!(r.labels, vec![true, true, false, false]);
         assert!((brute_force_min(&g) - 3.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn row_pass_routes_chains_both_ways() {
+        // One row: source 5 at x=0, sink 3 at x=5 (rightward), and in a second graph the mirror
+        // (leftward). Every edge 4: the max flow 3 goes along the row, which the row pass finds
+        // alone, so the search trees have nothing left to augment.
+        for leftward in [false, true] {
+            let mut g = GridGraph::new(6, 1);
+            let (a, b) = if leftward { (5, 0) } else { (0, 5) };
+            g.set_terminal(a, 0, 5.0, 0.0);
+            g.set_terminal(b, 0, 0.0, 3.0);
+            for x in 0..5 {
+                g.set_right(x, 0, 4.0);
+            }
+            let mut mf = GridMaxFlow::new();
+            let r = mf.solve(&g);
+            assert!((r.flow - 3.0).abs() < 1e-9, "flow {}", r.flow);
+            assert_eq!(mf.stats().augmentations, 0);
+            assert!((g.cut_cost(&r.labels) - 3.0).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn row_pass_batches_match_plain_search() {
+        // 19 rows: two full batches of ROW_BATCH rows and a partial one.
+        let (w, h) = (9, 2 * ROW_BATCH + 3);
+        let mut g = GridGraph::new(w, h);
+        let mut r = 7u32;
+        let mut next = || {
+            r = r.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+            ((r >> 16) % 9) as f32 * 0.5
+        };
+        for y in 0..h {
+            for x in 0..w {
+                let (a, b) = (next(), next());
+                g.set_terminal(x, y, a, b);
+                if x + 1 < w {
+                    let v = next();
+                    g.set_right(x, y, v);
+                }
+                if y + 1 < h {
+                    let v = next();
+                    g.set_down(x, y, v);
+                }
+            }
+        }
+        let with = GridMaxFlow::new().solve(&g);
+        let mut plain = GridMaxFlow::new();
+        plain.set_prepass(false);
+        let without = plain.solve(&g);
+        assert!(
+            rel_close(with.flow, without.flow, 1e-6),
+            "{} vs {}",
+            with.flow,
+            without.flow
+        );
+        assert!(rel_close(with.flow, g.cut_cost(&with.labels), 1e-6));
     }
 
     #[test]
