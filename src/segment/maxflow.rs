@@ -391,57 +391,74 @@ fn touches_other_tree(nodes: &mut [Node], i: usize, off: &[isize; 4]) -> bool {
     act
 }
 
-/// Rows routed together by [`push_along_rows`] (one SIMD lane each).
-const ROW_BATCH: usize = 8;
-type Lanes = [f32; ROW_BATCH];
+/// Lines (rows or columns) routed together by [`push_along_lines`] (one SIMD lane each).
+const LINE_BATCH: usize = 8;
+type Lanes = [f32; LINE_BATCH];
 
-/// Scratch for [`push_along_rows`]: per column, one lane per row of the batch.
+/// Scratch for [`push_along_lines`]: per position along the lines, one lane per line of the batch.
 #[derive(Debug, Default)]
-struct RowScratch {
+struct LineScratch {
     tr: Vec<Lanes>,
-    left: Vec<Lanes>,
-    right: Vec<Lanes>,
+    /// Residual capacity towards the previous position (left or up).
+    lo: Vec<Lanes>,
+    /// Residual capacity towards the next position (right or down).
+    hi: Vec<Lanes>,
     demand: Vec<Lanes>,
 }
 
-/// Saturates, within each of the `n <= ROW_BATCH` graph rows from `first`, paths from nodes with
-/// residual source capacity to nodes with residual sink capacity further right, then further left
-/// (a 1-D max-flow pass per row and direction, see [`sweep_lanes`]). The rows are independent, so
-/// they are processed in lock-step, one lane each, which breaks the sweeps' dependency chains.
-fn push_along_rows(
-    nodes: &mut [Node],
-    stride: usize,
-    w: usize,
+/// One batch of straight lines of the padded grid: `n <= LINE_BATCH` lines of `len` nodes, line
+/// `lane` starting at node `first + lane * lane_step` and advancing by `step`; `lo_dir` is the
+/// direction code towards the previous node (`0` for rows, `2` for columns; `lo_dir + 1` is the
+/// other way).
+#[derive(Clone, Copy, Debug)]
+struct Lines {
     first: usize,
+    lane_step: usize,
+    step: usize,
+    len: usize,
     n: usize,
-    s: &mut RowScratch,
-) {
-    if w < 2 {
+    lo_dir: usize,
+}
+
+impl Lines {
+    fn node(&self, lane: usize, k: usize) -> usize {
+        self.first + lane * self.lane_step + k * self.step
+    }
+}
+
+/// Saturates, within each line of the batch, paths from nodes with residual source capacity to
+/// nodes with residual sink capacity further along, then further back (a 1-D max-flow pass per line
+/// and direction, see [`sweep_lanes`]). The lines are independent, so they are processed in
+/// lock-step, one lane each, which breaks the sweeps' dependency chains.
+fn push_along_lines(nodes: &mut [Node], lines: Lines, s: &mut LineScratch) {
+    let len = lines.len;
+    if len < 2 {
         return;
     }
-    for v in [&mut s.tr, &mut s.left, &mut s.right] {
+    let (lo, hi) = (lines.lo_dir, lines.lo_dir + 1);
+    for v in [&mut s.tr, &mut s.lo, &mut s.hi] {
         v.clear();
-        v.resize(w, [0.0; ROW_BATCH]);
+        v.resize(len, [0.0; LINE_BATCH]);
     }
     s.demand.clear();
-    s.demand.resize(w + 1, [0.0; ROW_BATCH]);
-    for lane in 0..n {
-        let start = (first + lane + 1) * stride + 1;
-        for (x, node) in nodes[start..start + w].iter().enumerate() {
-            s.tr[x][lane] = node.tr;
-            s.left[x][lane] = node.cap[0];
-            s.right[x][lane] = node.cap[1];
+    s.demand.resize(len + 1, [0.0; LINE_BATCH]);
+    for lane in 0..lines.n {
+        for k in 0..len {
+            let node = &nodes[lines.node(lane, k)];
+            s.tr[k][lane] = node.tr;
+            s.lo[k][lane] = node.cap[lo];
+            s.hi[k][lane] = node.cap[hi];
         }
     }
     // Unused lanes are all zero: nothing flows in them.
-    sweep_lanes(&mut s.tr, &mut s.right, &mut s.left, &mut s.demand, false);
-    sweep_lanes(&mut s.tr, &mut s.left, &mut s.right, &mut s.demand, true);
-    for lane in 0..n {
-        let start = (first + lane + 1) * stride + 1;
-        for (x, node) in nodes[start..start + w].iter_mut().enumerate() {
-            node.tr = s.tr[x][lane];
-            node.cap[0] = s.left[x][lane];
-            node.cap[1] = s.right[x][lane];
+    sweep_lanes(&mut s.tr, &mut s.hi, &mut s.lo, &mut s.demand, false);
+    sweep_lanes(&mut s.tr, &mut s.lo, &mut s.hi, &mut s.demand, true);
+    for lane in 0..lines.n {
+        for k in 0..len {
+            let node = &mut nodes[lines.node(lane, k)];
+            node.tr = s.tr[k][lane];
+            node.cap[lo] = s.lo[k][lane];
+            node.cap[hi] = s.hi[k][lane];
         }
     }
 }
@@ -465,21 +482,21 @@ fn sweep_lanes(
     let pos = |k: usize| if leftward { w - 1 - k } else { k };
     // demand[k]: sink capacity reachable from the k-th position of the sweep onwards; the edge
     // out of the last position leads to the padding and has zero capacity.
-    demand[w] = [0.0; ROW_BATCH];
+    demand[w] = [0.0; LINE_BATCH];
     for k in (0..w).rev() {
         let x = pos(k);
         let next = demand[k + 1];
-        let mut d = [0.0; ROW_BATCH];
-        for l in 0..ROW_BATCH {
+        let mut d = [0.0; LINE_BATCH];
+        for l in 0..LINE_BATCH {
             d[l] = fmax(-tr[x][l], 0.0) + fmin(fwd[x][l], next[l]);
         }
         demand[k] = d;
     }
-    let mut carry = [0.0f32; ROW_BATCH];
+    let mut carry = [0.0f32; LINE_BATCH];
     for k in 0..w {
         let x = pos(k);
         let next = demand[k + 1];
-        for l in 0..ROW_BATCH {
+        for l in 0..LINE_BATCH {
             let t = tr[x][l] + carry[l];
             let f = fmin(fmin(fmax(t, 0.0), fwd[x][l]), next[l]);
             tr[x][l] = t - f;
@@ -488,7 +505,7 @@ fn sweep_lanes(
         }
         if k + 1 < w {
             let xn = pos(k + 1);
-            for l in 0..ROW_BATCH {
+            for l in 0..LINE_BATCH {
                 back[xn][l] += carry[l];
             }
         }
@@ -669,7 +686,7 @@ pub struct GridMaxFlow {
     /// Scratch list of the nodes on the current augmenting path.
     path: Vec<u32>,
     /// Scratch for the row passes of the pre-pass.
-    rows: RowScratch,
+    rows: LineScratch,
     stride: usize,
     dims: (usize, usize),
     stats: SolveStats,
@@ -690,7 +707,7 @@ impl GridMaxFlow {
             active: Fifo::new(),
             orphans: Fifo::new(),
             path: Vec::new(),
-            rows: RowScratch::default(),
+            rows: LineScratch::default(),
             stride: 0,
             dims: (0, 0),
             stats: SolveStats::default(),
@@ -778,64 +795,81 @@ impl GridMaxFlow {
         let active = &mut self.active;
         let rows = &mut self.rows;
         let off = [-1isize, 1, -(stride as isize), stride as isize];
-        // Rows [0, passed) have had the row pass and have their trees; rows [0, activated) are
-        // activated. Row r of the graph is the padded row r + 1.
+        // Rows [0, passed) have had the row pass. Row r of the graph is the padded row r + 1.
         let mut passed = 0;
-        let mut activated = 0;
         for y in 0..h {
             let row = (y + 1) * stride + 1;
             fill_row(&mut nodes[row..row + w], g, y);
-            if prepass {
-                // Even edges, then odd ones: the pushes of one pass touch disjoint node pairs, so
-                // they do not wait on each other.
-                for i in (row..row + w - 1).step_by(2) {
-                    push_short(nodes, i, i + 1, 1);
-                }
-                for i in (row + 1..row + w - 1).step_by(2) {
-                    push_short(nodes, i, i + 1, 1);
-                }
-                if y > 0 {
-                    for i in row..row + w {
-                        push_short(nodes, i - stride, i, 3);
-                    }
-                }
-            }
-            // Rows [0, complete) have seen all their short paths.
-            let complete = if y + 1 == h { h } else { y };
-            if complete - passed < ROW_BATCH && complete < h {
+            if !prepass {
                 continue;
             }
-            while passed < complete {
-                let n = ROW_BATCH.min(complete - passed);
-                if prepass {
-                    push_along_rows(nodes, stride, w, passed, n, rows);
+            // Even edges, then odd ones: the pushes of one pass touch disjoint node pairs, so they
+            // do not wait on each other.
+            for i in (row..row + w - 1).step_by(2) {
+                push_short(nodes, i, i + 1, 1);
+            }
+            for i in (row + 1..row + w - 1).step_by(2) {
+                push_short(nodes, i, i + 1, 1);
+            }
+            if y > 0 {
+                for i in row..row + w {
+                    push_short(nodes, i - stride, i, 3);
                 }
-                // The terminal residuals of these rows are final: make their roots.
-                for r in passed..passed + n {
-                    let start = (r + 1) * stride + 1;
-                    // Branch-free: the signs of the residuals are noise-like.
-                    for node in &mut nodes[start..start + w] {
-                        let (pos, neg) = ((node.tr > 0.0) as u8, (node.tr < 0.0) as u8);
-                        node.tree = pos * SRC + neg * SNK;
-                        node.parent = NO_PARENT - (pos | neg) * (NO_PARENT - TERMINAL);
-                        node.dist = 1;
-                    }
-                }
+            }
+            // Rows [0, complete) have seen all their short paths: route what is left along them,
+            // a batch of rows at a time while they are still in the cache.
+            let complete = if y + 1 == h { h } else { y };
+            while complete - passed >= LINE_BATCH || (complete == h && passed < h) {
+                let n = LINE_BATCH.min(complete - passed);
+                let lines = Lines {
+                    first: (passed + 1) * stride + 1,
+                    lane_step: stride,
+                    step: 1,
+                    len: w,
+                    n,
+                    lo_dir: 0,
+                };
+                push_along_lines(nodes, lines, rows);
                 passed += n;
             }
-            // Rows whose neighbours all have their trees: activate the roots that touch, through a
-            // residual edge, a node outside their own tree. A root surrounded by its own tree is
-            // passive; adoption re-activates it if a neighbour is freed, as for any passive node.
-            let ready = if passed == h { h } else { passed - 1 };
-            for r in activated..ready {
-                let start = (r + 1) * stride + 1;
-                for i in start..start + w {
+        }
+        if prepass {
+            // Then along the columns, a strip of columns at a time.
+            for x0 in (0..w).step_by(LINE_BATCH) {
+                let lines = Lines {
+                    first: stride + 1 + x0,
+                    lane_step: 1,
+                    step: stride,
+                    len: h,
+                    n: LINE_BATCH.min(w - x0),
+                    lo_dir: 2,
+                };
+                push_along_lines(nodes, lines, rows);
+            }
+        }
+        // The terminal residuals are final: make the roots, and activate those that touch, through
+        // a residual edge, a node outside their own tree (one row behind, once the row below has
+        // its trees). A root surrounded by its own tree is passive; adoption re-activates it if a
+        // neighbour is freed, as for any passive node.
+        for y in 0..=h {
+            if y < h {
+                let row = (y + 1) * stride + 1;
+                // Branch-free: the signs of the residuals are noise-like.
+                for node in &mut nodes[row..row + w] {
+                    let (pos, neg) = ((node.tr > 0.0) as u8, (node.tr < 0.0) as u8);
+                    node.tree = pos * SRC + neg * SNK;
+                    node.parent = NO_PARENT - (pos | neg) * (NO_PARENT - TERMINAL);
+                    node.dist = 1;
+                }
+            }
+            if y >= 1 {
+                let row = y * stride + 1;
+                for i in row..row + w {
                     let act = touches_other_tree(nodes, i, &off);
                     at(nodes, i).in_queue = act as u8;
                     active.push_if(i as u32, act);
                 }
             }
-            activated = activated.max(ready);
         }
     }
 
@@ -1185,17 +1219,23 @@ mod tests {
     }
 
     #[test]
-    fn row_pass_routes_chains_both_ways() {
-        // One row: source 5 at x=0, sink 3 at x=5 (rightward), and in a second graph the mirror
-        // (leftward). Every edge 4: the max flow 3 goes along the row, which the row pass finds
-        // alone, so the search trees have nothing left to augment.
-        for leftward in [false, true] {
-            let mut g = GridGraph::new(6, 1);
-            let (a, b) = if leftward { (5, 0) } else { (0, 5) };
-            g.set_terminal(a, 0, 5.0, 0.0);
-            g.set_terminal(b, 0, 0.0, 3.0);
-            for x in 0..5 {
-                g.set_right(x, 0, 4.0);
+    fn line_passes_route_chains_both_ways() {
+        // One row (or column): source 5 at one end, sink 3 at the other, every edge 4. The max flow
+        // 3 goes along the line, which the line passes find alone, so the search trees have
+        // nothing left to augment.
+        for (vertical, backwards) in [(false, false), (false, true), (true, false), (true, true)] {
+            let (w, h) = if vertical { (1, 6) } else { (6, 1) };
+            let mut g = GridGraph::new(w, h);
+            let (a, b) = if backwards { (5, 0) } else { (0, 5) };
+            let at = |k: usize| if vertical { (0, k) } else { (k, 0) };
+            g.set_terminal(at(a).0, at(a).1, 5.0, 0.0);
+            g.set_terminal(at(b).0, at(b).1, 0.0, 3.0);
+            for k in 0..5 {
+                if vertical {
+                    g.set_down(0, k, 4.0);
+                } else {
+                    g.set_right(k, 0, 4.0);
+                }
             }
             let mut mf = GridMaxFlow::new();
             let r = mf.solve(&g);
@@ -1206,9 +1246,9 @@ mod tests {
     }
 
     #[test]
-    fn row_pass_batches_match_plain_search() {
-        // 19 rows: two full batches of ROW_BATCH rows and a partial one.
-        let (w, h) = (9, 2 * ROW_BATCH + 3);
+    fn line_pass_batches_match_plain_search() {
+        // 19 rows and 9 columns: full and partial batches of rows and of columns.
+        let (w, h) = (LINE_BATCH + 1, 2 * LINE_BATCH + 3);
         let mut g = GridGraph::new(w, h);
         let mut r = 7u32;
         let mut next = || {
