@@ -803,14 +803,8 @@ impl GridMaxFlow {
             if !prepass {
                 continue;
             }
-            // Even edges, then odd ones: the pushes of one pass touch disjoint node pairs, so they
-            // do not wait on each other.
-            for i in (row..row + w - 1).step_by(2) {
-                push_short(nodes, i, i + 1, 1);
-            }
-            for i in (row + 1..row + w - 1).step_by(2) {
-                push_short(nodes, i, i + 1, 1);
-            }
+            // Short vertical paths source→p→q→sink first; the row pass below covers the
+            // horizontal ones (and longer paths along the row).
             if y > 0 {
                 for i in row..row + w {
                     push_short(nodes, i - stride, i, 3);
