@@ -392,6 +392,36 @@ fn fill_row(cells: &mut [Node], g: &GridGraph, y: usize) {
     }
 }
 
+/// Grows the trees by one level before the search: a free node `i` next to a root joins that root's
+/// tree as its child if the edge between them has residual capacity in the tree's direction (the
+/// first such neighbour, source roots first). Roots are known from the signs of the terminal
+/// residuals alone, so this works in the same sweep that makes them. Saves the growth steps of
+/// the roots, which then often have no free neighbour left and stay passive.
+#[inline(always)]
+fn attach_to_root(nodes: &mut [Node], i: usize, off: &[isize; 4]) {
+    let ni = *at(nodes, i);
+    let mut snk_dir = None;
+    for d in 0..4 {
+        let nj = *at(nodes, (i as isize + off[d]) as usize);
+        if nj.tr > 0.0 && nj.cap[d ^ 1] > 0.0 {
+            set_parent(at(nodes, i), SRC, d);
+            return;
+        }
+        if snk_dir.is_none() && nj.tr < 0.0 && ni.cap[d] > 0.0 {
+            snk_dir = Some(d);
+        }
+    }
+    if let Some(d) = snk_dir {
+        set_parent(at(nodes, i), SNK, d);
+    }
+}
+
+fn set_parent(n: &mut Node, tree: u8, d: usize) {
+    n.tree = tree;
+    n.parent = d as u8;
+    n.dist = 2;
+}
+
 /// Whether root `i` touches, through a residual edge in its tree's direction, a node outside its
 /// tree (free nodes in the padding count; their edges have zero capacity). Branch-free: the trees of
 /// neighbouring roots are noise-like.
@@ -873,6 +903,11 @@ impl GridMaxFlow {
                     node.parent = NO_PARENT - (pos | neg) * (NO_PARENT - TERMINAL);
                     node.dist = 1;
                 }
+                for i in row..row + w {
+                    if at(nodes, i).tr == 0.0 {
+                        attach_to_root(nodes, i, &off);
+                    }
+                }
             }
             if y >= 1 {
                 let row = y * stride + 1;
@@ -1292,6 +1327,28 @@ mod tests {
             without.flow
         );
         assert!(rel_close(with.flow, g.cut_cost(&with.labels), 1e-6));
+    }
+
+    #[test]
+    fn free_nodes_start_attached_to_a_neighbouring_root() {
+        // Row of three: source root, free node, sink root (pre-pass off, so nothing moves first).
+        // The free node joins the source root if it can receive from it, else the sink root.
+        for (w01, tree, parent) in [(4.0, SRC, 0u8), (0.0, SNK, 1u8)] {
+            let mut g = GridGraph::new(3, 1);
+            g.set_terminal(0, 0, 5.0, 0.0);
+            g.set_terminal(2, 0, 0.0, 3.0);
+            g.set_right(0, 0, w01);
+            g.set_right(1, 0, 4.0);
+            let mut mf = GridMaxFlow::new();
+            mf.set_prepass(false);
+            mf.prepare(&g);
+            let middle = mf.nodes[mf.stride + 2];
+            assert_eq!((middle.tree, middle.parent, middle.dist), (tree, parent, 2));
+            let r = mf.solve(&g);
+            let expected = if w01 > 0.0 { 3.0 } else { 0.0 };
+            assert!((r.flow - expected).abs() < 1e-9, "flow {}", r.flow);
+            assert!((g.cut_cost(&r.labels) - expected).abs() < 1e-9);
+        }
     }
 
     #[test]
