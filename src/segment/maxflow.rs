@@ -45,16 +45,18 @@
 //!   origin-check walk of adoption to stamp distances from the list (+1..6 %); a LIFO active queue
 //!   (+50 %) or orphan queue (+3 %); adopting the first valid parent instead of the nearest (+2 %);
 //!   other neighbour orders in growth, queueing a path's orphans root side first, other prefetch
-//!   distances (all within ±3 %, noise); growing only the source tree (−5 % here, +6 % on
-//!   1440x1080); a second row pass after the column pass (+13 %); running the line passes on the
-//!   node records in place instead of 8-lane copies (+7 % in the pre-pass); the horizontal
-//!   short-path pushes before the row pass (the row pass covers them; without them the trees have
-//!   5 % fewer augmentations); dropping the vertical short-path pushes too (+2..10 %); the column
-//!   pass in bands of 16..128 rows while they are in the cache (7.3K..11.5K augmentations instead
-//!   of 5.5K); 4 or 16 lines in lock-step instead of 8 (no gain); attaching free nodes also to
-//!   already attached left/up neighbours, i.e. many levels in raster order (fewer growth steps but
-//!   more orphans, +4..13 %); the root sweep made branch-free over all nodes (+10 % in the
-//!   pre-pass); filling a row in one pass of zipped iterators (no change);
+//!   distances (all within ±3 %, noise); growing only the source tree (before the one-level start:
+//!   −5 % here, +6 % on 1440x1080; after it +10 % and +15 %); a second row pass after the column
+//!   pass (+13 %); running the line passes on the node records in place instead of 8-lane copies
+//!   (+7 % in the pre-pass); the horizontal short-path pushes before the row pass (the row pass
+//!   covers them; without them the trees have 5 % fewer augmentations); dropping the vertical
+//!   short-path pushes too (+2..10 %); the column pass in bands of 16..128 rows while they are in
+//!   the cache (7.3K..11.5K augmentations instead of 5.5K); 4 or 16 lines in lock-step instead of 8
+//!   (no gain); attaching free nodes also to already attached left/up neighbours, i.e. many levels
+//!   in raster order (fewer growth steps but more orphans, +4..13 %); the root sweep made
+//!   branch-free over all nodes (+10 % in the pre-pass); filling a row in one pass of zipped
+//!   iterators (no change); a second start level (free nodes next to first-level nodes; growth
+//!   steps 48K -> 37K, time within ±4 %);
 //! * all buffers live in [`GridMaxFlow`] and are reused: solving graphs of an unchanged size does not
 //!   allocate apart from the returned label vector.
 
