@@ -1303,15 +1303,14 @@ mod tests {
         }
     }
 
-    #[test]
-    fn line_pass_batches_match_plain_search() {
-        // 19 rows and 9 columns: full and partial batches of rows and of columns.
-        let (w, h) = (LINE_BATCH + 1, 2 * LINE_BATCH + 3);
+    /// A `w`×`h` grid whose capacities are `step` × 0..`levels` from a linear congruential sequence
+    /// started at `seed` (ties and zeros on purpose).
+    fn lcg_grid(w: usize, h: usize, seed: u32, levels: u32, step: f32) -> GridGraph {
         let mut g = GridGraph::new(w, h);
-        let mut r = 7u32;
+        let mut r = seed;
         let mut next = || {
             r = r.wrapping_mul(1_103_515_245).wrapping_add(12_345);
-            ((r >> 16) % 9) as f32 * 0.5
+            ((r >> 16) % levels) as f32 * step
         };
         for y in 0..h {
             for x in 0..w {
@@ -1327,6 +1326,14 @@ mod tests {
                 }
             }
         }
+        g
+    }
+
+    #[test]
+    fn line_pass_batches_match_plain_search() {
+        // 19 rows and 9 columns: full and partial batches of rows and of columns.
+        let (w, h) = (LINE_BATCH + 1, 2 * LINE_BATCH + 3);
+        let g = lcg_grid(w, h, 7, 9, 0.5);
         let with = GridMaxFlow::new().solve(&g);
         let mut plain = GridMaxFlow::new();
         plain.set_prepass(false);
@@ -1451,35 +1458,12 @@ mod tests {
     #[test]
     fn reuse_across_shapes() {
         // 3x4 and 4x3 have the same padded node count: the padding ring must be reset.
-        let make = |w: usize, h: usize, seed: u32| {
-            let mut g = GridGraph::new(w, h);
-            let mut r = seed;
-            let mut next = || {
-                r = r.wrapping_mul(1_103_515_245).wrapping_add(12_345);
-                ((r >> 16) % 7) as f32
-            };
-            for y in 0..h {
-                for x in 0..w {
-                    let (a, b) = (next(), next());
-                    g.set_terminal(x, y, a, b);
-                    if x + 1 < w {
-                        let v = next();
-                        g.set_right(x, y, v);
-                    }
-                    if y + 1 < h {
-                        let v = next();
-                        g.set_down(x, y, v);
-                    }
-                }
-            }
-            g
-        };
         let mut mf = GridMaxFlow::new();
         for (k, (w, h)) in [(3, 4), (4, 3), (3, 4), (10, 1), (1, 10), (5, 5)]
             .into_iter()
             .enumerate()
         {
-            let g = make(w, h, k as u32 + 1);
+            let g = lcg_grid(w, h, k as u32 + 1, 7, 1.0);
             let r = mf.solve(&g);
             let fresh = GridMaxFlow::new().solve(&g);
             assert!(
