@@ -5,8 +5,9 @@
 //! 2. builds the graph: unaries `σ_C·C + σ_G·G + σ_M·M + σ_T·T` per pixel (the motion and temporal terms
 //!    use the segmenter's own masks of the previous one and two frames; the first frame uses the label
 //!    prior and the second the terms it has), pairwise weights from the neighbourhood table on the four
-//!    axial edges (a label-pair energy A, B, D becomes an edge weight (2B − A − D)/2 plus (D − A)/2 on
-//!    both nodes' person cost);
+//!    axial edges (a label-pair energy A, B, D becomes an edge weight (2B − A − D)/2; the (D − A)/2 it
+//!    would add to both nodes' person cost is left out, see [`Segmenter::new`]). The cut looks for the
+//!    suit: its colour table is trained on the suit part of the masks only;
 //! 3. cuts it with [`GridMaxFlow`] (the search buffers are reused from frame to frame);
 //!    the background's colour likelihood mixes the trained table with a background colour histogram
 //!    learned online from this stream's own confident background pixels (more than
@@ -14,7 +15,9 @@
 //!    [`SegmenterOptions::adapt_rate`] per frame), as bilayer segmenters do: the 20 training frames
 //!    cannot show the room the suit will be used in, the stream itself does after one frame;
 //! 4. keeps the connected region that carries the most suit cloth next to markers, fills its small holes
-//!    ([`cleanup`](super::cleanup)), and reports what that changed;
+//!    ([`cleanup`](super::cleanup)), and reports what that changed; then attaches the head, hands and
+//!    shoes: pixels of a band around the suit ([`SegmenterOptions::part_reach`]) connected to it whose
+//!    colour is likelier under the learned part table than under the (online) background;
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut.
 //!
@@ -24,10 +27,12 @@ use std::time::Instant;
 
 use image::RgbImage;
 
-use super::cleanup::{fill_holes, keep_person_region, CleanupReport};
+use super::cleanup::{
+    attach_parts, fill_holes, keep_person_region, part_band, CleanupReport, PART_REACH,
+};
 use super::features::{
-    chamfer, colour_index, contrast_bin, downscale, temporal_bin, ColourLut, FrameFeatures,
-    MarkerGate, COLOUR_BINS, FAR, PATTERN_CLASSES, TEMPORAL_BINS,
+    chamfer, colour_index, contrast_bin, downscale, is_suit_pattern, temporal_bin, ColourLut,
+    FrameFeatures, MarkerGate, COLOUR_BINS, FAR, PATTERN_CLASSES, TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
 use super::tables::SegmenterTables;
@@ -49,6 +54,9 @@ pub struct SegmenterOptions {
     pub adapt_margin: u32,
     /// Weight of the online histogram in the background colour likelihood once it exists.
     pub adapt_share: f32,
+    /// How far the head, hands and shoes are looked for around the suit, as a share of the suit
+    /// region's height (0: the mask is the suit only).
+    pub part_reach: f32,
 }
 
 impl Default for SegmenterOptions {
@@ -60,6 +68,7 @@ impl Default for SegmenterOptions {
             adapt_rate: 0.3,
             adapt_margin: 4,
             adapt_share: 0.7,
+            part_reach: PART_REACH,
         }
     }
 }
@@ -95,9 +104,8 @@ pub struct Segmenter {
     tables: SegmenterTables,
     options: SegmenterOptions,
     lut: ColourLut,
-    /// Per contrast bin: edge weight and the person-cost adjustment of both endpoints.
+    /// Per contrast bin: the edge weight.
     edge_weight: Vec<f32>,
-    edge_adjust: Vec<f32>,
     gate: MarkerGate,
     maxflow: GridMaxFlow,
     graph: GridGraph,
@@ -114,7 +122,24 @@ pub struct Segmenter {
     background_colour: Vec<f32>,
     /// p(pattern class | background) of the trained table.
     background_pattern: [f32; PATTERN_CLASSES],
+    /// Background colour NLL per colour bin (the pattern classes summed), trained and online mixed.
+    background_bin: Vec<f32>,
     distance: Vec<u16>,
+    band: Vec<bool>,
+    part: Vec<bool>,
+    stack: Vec<usize>,
+}
+
+/// −ln Σ_class p(class · COLOUR_BINS + bin) of a joint colour × pattern NLL table.
+fn marginal_nll(joint: &[f32]) -> Vec<f32> {
+    (0..COLOUR_BINS)
+        .map(|bin| {
+            let p: f32 = (0..PATTERN_CLASSES)
+                .map(|c| (-joint[c * COLOUR_BINS + bin]).exp())
+                .sum();
+            -(p.max(1e-6)).ln()
+        })
+        .collect()
 }
 
 impl Segmenter {
@@ -124,13 +149,15 @@ impl Segmenter {
         options: SegmenterOptions,
     ) -> Segmenter {
         // Pairwise energies A (both background), B (different), D (both person) per contrast bin,
-        // each −ln p(contrast | pair) − ln p(pair equal or different).
+        // each −ln p(contrast | pair) − ln p(pair equal or different); the edge weight is
+        // (2B − A − D)/2. The rest of the pair energy, (D − A)/2 on both nodes' person cost, would say
+        // how smooth the person is against the training room; a new room is smoother or rougher, so
+        // it is left out (with it, a smooth orange or a cat's fur next to the suit became person).
         let n = &tables.neighbourhood;
         let sigma = tables.weights.neighbourhood;
         let [equal, different] = tables.pair_prior;
         let bins = n[0].len();
         let mut edge_weight = Vec::with_capacity(bins);
-        let mut edge_adjust = Vec::with_capacity(bins);
         for k in 0..bins {
             let (a, b, d) = (
                 n[0][k] + equal,
@@ -138,7 +165,6 @@ impl Segmenter {
                 n[3][k] + equal,
             );
             edge_weight.push(sigma * (0.5 * (2.0 * b - a - d)).max(0.0));
-            edge_adjust.push(sigma * 0.5 * (d - a));
         }
         let background_pattern = std::array::from_fn(|class| {
             tables.colour[0][class * COLOUR_BINS..(class + 1) * COLOUR_BINS]
@@ -147,12 +173,12 @@ impl Segmenter {
                 .sum::<f32>()
         });
         let background_colour = tables.colour[0].clone();
+        let background_bin = marginal_nll(&tables.colour[0]);
         Segmenter {
             tables,
             options,
             lut: ColourLut::new(),
             edge_weight,
-            edge_adjust,
             gate: MarkerGate::new(suit),
             maxflow: GridMaxFlow::new(),
             graph: GridGraph::new(0, 0),
@@ -166,7 +192,11 @@ impl Segmenter {
             online_background: None,
             background_colour,
             background_pattern,
+            background_bin,
             distance: Vec::new(),
+            band: Vec::new(),
+            part: Vec::new(),
+            stack: Vec::new(),
         }
     }
 
@@ -181,6 +211,7 @@ impl Segmenter {
         self.before_previous_mask = None;
         self.online_background = None;
         self.background_colour.clone_from(&self.tables.colour[0]);
+        self.background_bin = marginal_nll(&self.tables.colour[0]);
     }
 
     /// Learns the background colours of this frame from pixels well away from the person and
@@ -226,6 +257,11 @@ impl Segmenter {
                     (1.0 - share) * trained + share * online[bin] * self.background_pattern[class];
                 self.background_colour[k] = -(p.max(1e-6)).ln();
             }
+        }
+        let trained = marginal_nll(&self.tables.colour[0]);
+        for (bin, v) in self.background_bin.iter_mut().enumerate() {
+            let p = (1.0 - share) * (-trained[bin]).exp() + share * online[bin];
+            *v = -(p.max(1e-6)).ln();
         }
         self.online_background = Some(online);
     }
@@ -298,14 +334,10 @@ impl Segmenter {
                 if x + 1 < w {
                     let bin = contrast_bin(f.colour[i], f.colour[i + 1]);
                     right[y * (w - 1) + x] = self.edge_weight[bin];
-                    self.unary[i][1] += self.edge_adjust[bin];
-                    self.unary[i + 1][1] += self.edge_adjust[bin];
                 }
                 if y + 1 < h {
                     let bin = contrast_bin(f.colour[i], f.colour[i + w]);
                     down[i] = self.edge_weight[bin];
-                    self.unary[i][1] += self.edge_adjust[bin];
-                    self.unary[i + w][1] += self.edge_adjust[bin];
                 }
             }
         }
@@ -345,7 +377,7 @@ impl Segmenter {
             // Suit cloth next to a marker: what only the suit looks like (a red poster is all marker
             // colour, a lawn all cloth colour, neither has the two interleaved).
             |i| {
-                if pattern[i] >= 3 && self.gate.is_cloth(colours[i]) {
+                if is_suit_pattern(pattern[i], 3) && self.gate.is_cloth(colours[i]) {
                     1.0
                 } else {
                     0.01
@@ -362,15 +394,53 @@ impl Segmenter {
             &mut ids,
             &mut report,
         );
+        // The parts outside the suit: band pixels whose colour is likelier a part than background.
+        let mut person = labels.clone();
+        part_band(
+            &labels,
+            w,
+            h,
+            self.options.part_reach,
+            &mut self.distance,
+            &mut self.band,
+        );
+        let sigma = self.tables.weights.colour;
+        let (part_nll, prior, bg) = (
+            &self.tables.part,
+            self.tables.part_prior,
+            &self.background_bin,
+        );
+        let added = attach_parts(
+            &mut person,
+            &self.band,
+            w,
+            h,
+            |i| {
+                let bin = colours[i].bin as usize;
+                sigma * part_nll[bin] + prior[1] < sigma * bg[bin] + prior[0]
+            },
+            &mut self.part,
+            &mut self.stack,
+        );
+        if added > 0 {
+            fill_holes(
+                &mut person,
+                w,
+                h,
+                (self.options.max_hole_fraction * n) as usize,
+                &mut ids,
+                &mut report,
+            );
+        }
         self.ids = ids;
         times.cleanup = ms(started);
 
         let started = Instant::now();
-        let mask = self.refine(frame, &labels, w, h);
+        let mask = self.refine(frame, &person, w, h);
         times.refine = ms(started);
 
         // History for the next frame.
-        self.adapt_background(&labels);
+        self.adapt_background(&person);
         self.before_previous_mask = self.previous_mask.take();
         self.previous_mask = Some(labels);
         std::mem::swap(
@@ -446,7 +516,13 @@ impl Segmenter {
                         let near =
                             (sx.round() as usize).min(w - 1) + (sy.round() as usize).min(h - 1) * w;
                         let k = colour_index(c, self.pattern_at(near));
-                        let e_fg = sigma * self.tables.colour[1][k] + prior * (1.0 - m);
+                        let suit = sigma * self.tables.colour[1][k];
+                        let fg = if self.part.get(near).copied().unwrap_or(false) {
+                            suit.min(sigma * self.tables.part[c.bin as usize])
+                        } else {
+                            suit
+                        };
+                        let e_fg = fg + prior * (1.0 - m);
                         let e_bg = sigma * self.background_colour[k] + prior * m;
                         e_fg < e_bg
                     };

@@ -12,7 +12,10 @@
 
 use image::RgbImage;
 
-use super::features::{downscale, ColourLut, FrameFeatures, MarkerGate};
+use super::cleanup::{part_band, PART_REACH};
+use super::features::{
+    chamfer, downscale, is_suit_pattern, ColourLut, FrameFeatures, MarkerGate, FAR,
+};
 use super::segmenter::{Segmenter, SegmenterOptions};
 use super::tables::{SegmenterTables, TableCounts, Weights, WEIGHTS};
 use crate::mask::Mask;
@@ -80,22 +83,66 @@ pub fn downscale_mask(mask: &Mask, factor: u32) -> (Vec<bool>, usize, usize) {
     (out, w, h)
 }
 
+/// Person pixels this close (in pixels at the cut's resolution) to a suit-coloured person pixel are the
+/// suit; the rest of the person (head, hands, shoes) are its parts.
+pub const SUIT_RADIUS: u16 = 2;
+
+/// The suit part of a person mask at the features' size: person pixels within [`SUIT_RADIUS`] of a
+/// person pixel of the cloth's or a marker's colour in the suit's pattern (skin has a red marker's
+/// hue, but no mixed markers around it).
+pub fn suit_pixels(
+    features: &FrameFeatures,
+    person: &[bool],
+    gate: &MarkerGate,
+    distance: &mut Vec<u16>,
+) -> Vec<bool> {
+    distance.clear();
+    let pattern = &features.pattern;
+    distance.extend(
+        features
+            .colour
+            .iter()
+            .zip(person)
+            .enumerate()
+            .map(|(i, (&c, &p))| {
+                if p && (gate.is_cloth(c) || gate.is_marker(c)) && is_suit_pattern(pattern[i], 1) {
+                    0
+                } else {
+                    FAR
+                }
+            }),
+    );
+    chamfer(distance, features.width, features.height);
+    person
+        .iter()
+        .zip(distance.iter())
+        .map(|(&p, &d)| p && d <= 3 * SUIT_RADIUS)
+        .collect()
+}
+
+/// Counts the tables: the cut's tables on the suit part of the masks (the cut finds the suit), the
+/// part table and band prior on the rest of the person.
 fn count(frames: &[TrainingFrame], factor: u32, lut: &ColourLut, gate: &MarkerGate) -> TableCounts {
     let mut counts = TableCounts::default();
+    let (mut distance, mut band) = (Vec::new(), Vec::new());
     let mut history: Vec<(FrameFeatures, Vec<bool>)> = Vec::new();
     let mut small = Vec::new();
     for frame in frames {
         let (w, h) = downscale(&frame.image, factor, &mut small);
         let mut features = FrameFeatures::default();
         features.compute(&small, w, h, lut, gate);
-        let (mask, _, _) = downscale_mask(&frame.mask, factor);
+        let (person, _, _) = downscale_mask(&frame.mask, factor);
+        let mask = suit_pixels(&features, &person, gate, &mut distance);
+        part_band(&mask, w, h, PART_REACH, &mut distance, &mut band);
+        counts.add_parts(&features, &person, &mask, &band);
+        let parts: Vec<bool> = person.iter().zip(&mask).map(|(&p, &s)| p && !s).collect();
         let previous = history.last().map(|(f, m)| (f, m.as_slice()));
         let before = if history.len() >= 2 {
             Some(history[history.len() - 2].1.as_slice())
         } else {
             None
         };
-        counts.add_frame(&features, &mask, previous, before);
+        counts.add_frame(&features, &mask, Some(&parts), previous, before);
         history.push((features, mask));
         if history.len() > 2 {
             history.remove(0);
