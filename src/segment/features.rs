@@ -362,6 +362,35 @@ pub fn chamfer(d: &mut [u16], w: usize, h: usize) {
     }
 }
 
+/// Pixels this close (at the cut's resolution) to a pixel of the suit's pattern can be the suit.
+pub const SUIT_RADIUS: u16 = 2;
+
+/// Where the suit can be: pixels within [`SUIT_RADIUS`] of a pixel of the cloth's or a marker's
+/// colour that sees the suit's mixed pattern around it (see [`PATTERN_CLASSES`]; skin has a red
+/// marker's hue, but no mixed markers around it). With `within`, only its set pixels are seeds.
+pub fn suit_support(
+    features: &FrameFeatures,
+    gate: &MarkerGate,
+    within: Option<&[bool]>,
+    distance: &mut Vec<u16>,
+    out: &mut Vec<bool>,
+) {
+    distance.clear();
+    distance.extend(features.colour.iter().enumerate().map(|(i, &c)| {
+        let seed = within.is_none_or(|m| m[i])
+            && is_suit_pattern(features.pattern[i], 1)
+            && (gate.is_cloth(c) || gate.is_marker(c));
+        if seed {
+            0
+        } else {
+            FAR
+        }
+    }));
+    chamfer(distance, features.width, features.height);
+    out.clear();
+    out.extend(distance.iter().map(|&d| d <= 3 * SUIT_RADIUS));
+}
+
 /// Box-downscales `image` by `factor` (1 = copy) into `out` (RGB, row-major).
 pub fn downscale(image: &RgbImage, factor: u32, out: &mut Vec<[u8; 3]>) -> (usize, usize) {
     let f = factor.max(1) as usize;

@@ -31,8 +31,8 @@ use super::cleanup::{
     attach_parts, fill_holes, keep_person_region, part_band, CleanupReport, PART_REACH,
 };
 use super::features::{
-    chamfer, colour_index, contrast_bin, downscale, is_suit_pattern, temporal_bin, ColourLut,
-    FrameFeatures, MarkerGate, COLOUR_BINS, FAR, PATTERN_CLASSES, TEMPORAL_BINS,
+    chamfer, colour_index, contrast_bin, downscale, is_suit_pattern, suit_support, temporal_bin,
+    ColourLut, FrameFeatures, MarkerGate, COLOUR_BINS, FAR, PATTERN_CLASSES, TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
 use super::tables::SegmenterTables;
@@ -350,6 +350,29 @@ impl Segmenter {
 
     /// Segments one frame.
     pub fn segment(&mut self, frame: &RgbImage) -> Segmentation {
+        if self.online_background.is_none()
+            && self.previous.is_none()
+            && self.options.adapt_rate > 0.0
+        {
+            // The first frame of a stream: no background seen yet. Segment it once to learn the
+            // room's colours away from the person, then again with them.
+            let first = self.segment_once(frame);
+            self.previous = None;
+            self.previous_mask = None;
+            self.before_previous_mask = None;
+            let mut second = self.segment_once(frame);
+            let (a, b) = (first.times, &mut second.times);
+            b.features += a.features;
+            b.graph += a.graph;
+            b.cut += a.cut;
+            b.cleanup += a.cleanup;
+            b.refine += a.refine;
+            return second;
+        }
+        self.segment_once(frame)
+    }
+
+    fn segment_once(&mut self, frame: &RgbImage) -> Segmentation {
         let mut times = StageTimes::default();
         let started = Instant::now();
         let (w, h) = downscale(frame, self.tables.downscale, &mut self.small);
@@ -367,6 +390,18 @@ impl Segmenter {
         let mut labels = result.labels;
 
         let started = Instant::now();
+        // The suit is where its pattern is: cut pixels far from any pixel of the pattern are not it
+        // (a yellow-green or orange region next to the suit that the smoothness pulled in).
+        suit_support(
+            &self.features,
+            &self.gate,
+            None,
+            &mut self.distance,
+            &mut self.band,
+        );
+        for (l, &s) in labels.iter_mut().zip(&self.band) {
+            *l &= s;
+        }
         let n = (w * h) as f32;
         let (colours, pattern) = (&self.features.colour, &self.features.pattern);
         let mut ids = std::mem::take(&mut self.ids);

@@ -160,57 +160,69 @@ fn nll_mixed(counts: &[f64], alpha: f64, uniform: f64) -> Vec<f32> {
 /// Uniform share of the background's colour and gradient tables, and of the person's.
 pub const BACKGROUND_UNIFORM: f64 = 0.5;
 pub const PERSON_UNIFORM: f64 = 0.02;
-/// Uniform share of the part table, and how many times its counts are smoothed: the training
-/// frames show one person's skin, hair and shoes; the suit will be worn by others.
+/// Uniform share of the part table, and how many times its counts are smoothed along hue,
+/// saturation and value: the training frames show one person's skin, hair and shoes; the suit will
+/// be worn by others, whose skin is lighter or darker (value, saturation) more than another hue.
 pub const PART_UNIFORM: f64 = 0.05;
-pub const PART_SMOOTHING: usize = 3;
+pub const PART_SMOOTHING: [usize; 3] = [0, 1, 3];
 
 /// Spreads colour counts to the neighbouring bins with weights ¼ ½ ¼ along hue (circularly),
 /// saturation and value (and along value for the achromatic bins), so that a change of light that
 /// shifts a colour by a bin does not fall into an empty one.
 fn smooth_colour(counts: &[f64]) -> Vec<f64> {
+    smooth_colour_axes(counts, 1, 1, 1)
+}
+
+/// [`smooth_colour`] with a number of ¼ ½ ¼ passes per axis (hue, saturation, value; the
+/// achromatic bins take the value passes).
+fn smooth_colour_axes(counts: &[f64], hue: usize, sat: usize, val: usize) -> Vec<f64> {
     let chromatic = HUE_BINS * SAT_BINS * VAL_BINS;
     let index = |h: usize, s: usize, v: usize| (h * SAT_BINS + s) * VAL_BINS + v;
     let mut a = counts.to_vec();
     let mut b = counts.to_vec();
-    // Along hue.
-    for h in 0..HUE_BINS {
-        for s in 0..SAT_BINS {
-            for v in 0..VAL_BINS {
-                let (hp, hn) = ((h + HUE_BINS - 1) % HUE_BINS, (h + 1) % HUE_BINS);
-                b[index(h, s, v)] =
-                    0.5 * a[index(h, s, v)] + 0.25 * (a[index(hp, s, v)] + a[index(hn, s, v)]);
-            }
-        }
-    }
-    std::mem::swap(&mut a, &mut b);
-    // Along saturation and value (clamped at the ends).
     let clamp_step = |k: usize, n: usize| (k.saturating_sub(1), (k + 1).min(n - 1));
-    for h in 0..HUE_BINS {
-        for s in 0..SAT_BINS {
-            for v in 0..VAL_BINS {
-                let (sp, sn) = clamp_step(s, SAT_BINS);
-                b[index(h, s, v)] =
-                    0.5 * a[index(h, s, v)] + 0.25 * (a[index(h, sp, v)] + a[index(h, sn, v)]);
+    for _ in 0..hue {
+        for h in 0..HUE_BINS {
+            for s in 0..SAT_BINS {
+                for v in 0..VAL_BINS {
+                    let (hp, hn) = ((h + HUE_BINS - 1) % HUE_BINS, (h + 1) % HUE_BINS);
+                    b[index(h, s, v)] =
+                        0.5 * a[index(h, s, v)] + 0.25 * (a[index(hp, s, v)] + a[index(hn, s, v)]);
+                }
             }
         }
+        std::mem::swap(&mut a, &mut b);
     }
-    std::mem::swap(&mut a, &mut b);
-    for h in 0..HUE_BINS {
-        for s in 0..SAT_BINS {
-            for v in 0..VAL_BINS {
-                let (vp, vn) = clamp_step(v, VAL_BINS);
-                b[index(h, s, v)] =
-                    0.5 * a[index(h, s, v)] + 0.25 * (a[index(h, s, vp)] + a[index(h, s, vn)]);
+    for _ in 0..sat {
+        for h in 0..HUE_BINS {
+            for s in 0..SAT_BINS {
+                for v in 0..VAL_BINS {
+                    let (sp, sn) = clamp_step(s, SAT_BINS);
+                    b[index(h, s, v)] =
+                        0.5 * a[index(h, s, v)] + 0.25 * (a[index(h, sp, v)] + a[index(h, sn, v)]);
+                }
             }
         }
+        std::mem::swap(&mut a, &mut b);
     }
-    for g in 0..GREY_BINS {
-        let (gp, gn) = clamp_step(g, GREY_BINS);
-        b[chromatic + g] =
-            0.5 * counts[chromatic + g] + 0.25 * (counts[chromatic + gp] + counts[chromatic + gn]);
+    for _ in 0..val {
+        for h in 0..HUE_BINS {
+            for s in 0..SAT_BINS {
+                for v in 0..VAL_BINS {
+                    let (vp, vn) = clamp_step(v, VAL_BINS);
+                    b[index(h, s, v)] =
+                        0.5 * a[index(h, s, v)] + 0.25 * (a[index(h, s, vp)] + a[index(h, s, vn)]);
+                }
+            }
+        }
+        for g in 0..GREY_BINS {
+            let (gp, gn) = clamp_step(g, GREY_BINS);
+            b[chromatic + g] =
+                0.5 * a[chromatic + g] + 0.25 * (a[chromatic + gp] + a[chromatic + gn]);
+        }
+        std::mem::swap(&mut a, &mut b);
     }
-    b
+    a
 }
 
 impl TableCounts {
@@ -315,11 +327,8 @@ impl TableCounts {
             motion: std::array::from_fn(|k| nll(&self.motion[k], 0.5)),
             temporal,
             part: {
-                let mut smoothed = self.part.clone();
-                for _ in 0..PART_SMOOTHING {
-                    smoothed = smooth_colour(&smoothed);
-                }
-                nll_mixed(&smoothed, 0.5, PART_UNIFORM)
+                let [h, s, v] = PART_SMOOTHING;
+                nll_mixed(&smooth_colour_axes(&self.part, h, s, v), 0.5, PART_UNIFORM)
             },
             part_prior: {
                 let n = self.band[0] + self.band[1] + 2.0;

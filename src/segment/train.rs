@@ -13,9 +13,7 @@
 use image::RgbImage;
 
 use super::cleanup::{part_band, PART_REACH};
-use super::features::{
-    chamfer, downscale, is_suit_pattern, ColourLut, FrameFeatures, MarkerGate, FAR,
-};
+use super::features::{downscale, suit_support, ColourLut, FrameFeatures, MarkerGate};
 use super::segmenter::{Segmenter, SegmenterOptions};
 use super::tables::{SegmenterTables, TableCounts, Weights, WEIGHTS};
 use crate::mask::Mask;
@@ -83,41 +81,18 @@ pub fn downscale_mask(mask: &Mask, factor: u32) -> (Vec<bool>, usize, usize) {
     (out, w, h)
 }
 
-/// Person pixels this close (in pixels at the cut's resolution) to a suit-coloured person pixel are the
-/// suit; the rest of the person (head, hands, shoes) are its parts.
-pub const SUIT_RADIUS: u16 = 2;
-
-/// The suit part of a person mask at the features' size: person pixels within [`SUIT_RADIUS`] of a
-/// person pixel of the cloth's or a marker's colour in the suit's pattern (skin has a red marker's
-/// hue, but no mixed markers around it).
+/// The suit part of a person mask at the features' size: person pixels within
+/// [`SUIT_RADIUS`](super::features::SUIT_RADIUS) of a person pixel of the cloth's or a marker's
+/// colour in the suit's pattern (see [`suit_support`]).
 pub fn suit_pixels(
     features: &FrameFeatures,
     person: &[bool],
     gate: &MarkerGate,
     distance: &mut Vec<u16>,
 ) -> Vec<bool> {
-    distance.clear();
-    let pattern = &features.pattern;
-    distance.extend(
-        features
-            .colour
-            .iter()
-            .zip(person)
-            .enumerate()
-            .map(|(i, (&c, &p))| {
-                if p && (gate.is_cloth(c) || gate.is_marker(c)) && is_suit_pattern(pattern[i], 1) {
-                    0
-                } else {
-                    FAR
-                }
-            }),
-    );
-    chamfer(distance, features.width, features.height);
-    person
-        .iter()
-        .zip(distance.iter())
-        .map(|(&p, &d)| p && d <= 3 * SUIT_RADIUS)
-        .collect()
+    let mut support = Vec::new();
+    suit_support(features, gate, Some(person), distance, &mut support);
+    person.iter().zip(&support).map(|(&p, &s)| p && s).collect()
 }
 
 /// Counts the tables: the cut's tables on the suit part of the masks (the cut finds the suit), the
@@ -295,7 +270,7 @@ mod tests {
         assert_eq!(downscale_mask(&m, 2), (vec![true, false], 2, 1));
     }
 
-    /// Frames of a green square with red marker dots moving over a textured, partly green background.
+    /// Frames of a green square with red and cyan marker dots moving over a textured, partly green background.
     fn synthetic_frames(n: usize) -> Vec<TrainingFrame> {
         (0..n)
             .map(|t| {
@@ -313,7 +288,12 @@ mod tests {
                         let px = if inside {
                             mask[(y * w + x) as usize] = true;
                             if x % 7 < 3 && y % 7 < 3 {
-                                [200, 30, 30]
+                                // Red and cyan dots: the suit's mix of marker hues.
+                                if (x / 7 + y / 7) % 2 == 0 {
+                                    [200, 30, 30]
+                                } else {
+                                    [38, 191, 191]
+                                }
                             } else {
                                 [120, 180, 60]
                             }
