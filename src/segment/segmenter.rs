@@ -48,6 +48,8 @@ pub struct SegmenterOptions {
     pub max_hole_fraction: f32,
     /// Weight of the upsampled cut against the full-resolution colour in the boundary band (nats).
     pub refine_prior: f32,
+    /// Widen the boundary band to the cells next to a label change, not only those across it.
+    pub refine_wide: bool,
     /// Share of the online background histogram that each new frame replaces (0 = no adaptation).
     pub adapt_rate: f32,
     /// Background pixels closer than this to the person (at the cut's resolution) are not learned.
@@ -65,6 +67,7 @@ impl Default for SegmenterOptions {
             min_person_fraction: 0.002,
             max_hole_fraction: 0.001,
             refine_prior: 3.0,
+            refine_wide: true,
             adapt_rate: 0.3,
             adapt_margin: 4,
             adapt_share: 0.7,
@@ -507,6 +510,27 @@ impl Segmenter {
         let sigma = self.tables.weights.colour;
         let prior = self.options.refine_prior;
         let raw = frame.as_raw();
+        // Low-resolution pixels with a differently labelled pixel among their 8 neighbours: with a
+        // wide band, the cells around them are decided per pixel too (the cut, at half the
+        // resolution, can be a pixel off, and that pixel is two at full resolution).
+        let wide = self.options.refine_wide;
+        let mut near = Vec::new();
+        if wide {
+            near.resize(w * h, false);
+            for y in 0..h {
+                for x in 0..w {
+                    let l = labels[y * w + x];
+                    'n: for ny in y.saturating_sub(1)..(y + 2).min(h) {
+                        for nx in x.saturating_sub(1)..(x + 2).min(w) {
+                            if labels[ny * w + nx] != l {
+                                near[y * w + x] = true;
+                                break 'n;
+                            }
+                        }
+                    }
+                }
+            }
+        }
         let fw_us = fw as usize;
         // Output columns grouped by the low-resolution column pair they interpolate between.
         let column = |x: usize| ((x as f32 + 0.5) / f - 0.5).clamp(0.0, (w - 1) as f32);
@@ -530,7 +554,13 @@ impl Segmenter {
                     labels[y1 * w + x0],
                     labels[y1 * w + x1],
                 ];
-                if corners.iter().all(|&c| c == corners[0]) {
+                let uniform = corners.iter().all(|&c| c == corners[0]);
+                let close = wide
+                    && (near[y0 * w + x0]
+                        || near[y0 * w + x1]
+                        || near[y1 * w + x0]
+                        || near[y1 * w + x1]);
+                if uniform && !close {
                     row[x..end].fill(corners[0]);
                     x = end;
                     continue;
@@ -541,9 +571,9 @@ impl Segmenter {
                     let l = |c: bool| c as u8 as f32;
                     let m = (l(corners[0]) * (1.0 - tx) + l(corners[1]) * tx) * (1.0 - ty)
                         + (l(corners[2]) * (1.0 - tx) + l(corners[3]) * tx) * ty;
-                    *value = if m <= 0.0 {
+                    *value = if m <= 0.0 && !close {
                         false
-                    } else if m >= 1.0 {
+                    } else if m >= 1.0 && !close {
                         true
                     } else {
                         let p = (y * fw_us + xx) * 3;
