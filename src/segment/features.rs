@@ -295,7 +295,8 @@ pub struct FrameFeatures {
     pub gradient_magnitude: Vec<u8>,
     /// Pattern class (see [`PATTERN_CLASSES`]), joint with the colour in the colour table.
     pub pattern: Vec<u8>,
-    marker_sum: Vec<u32>,
+    /// Per pixel: which half of the pattern it has (see `compute_pattern`).
+    codes: Vec<u8>,
     cloth_sum: Vec<u32>,
     /// One summed-area table per marker colour.
     hue_sums: Vec<Vec<u32>>,
@@ -457,27 +458,26 @@ impl FrameFeatures {
     /// pattern; inside a red poster or a lawn, or a few pixels off the person, it does not.
     fn compute_pattern(&mut self, gate: &MarkerGate) {
         let (w, h) = (self.width, self.height);
-        integral(
-            &mut self.marker_sum,
-            w,
-            h,
-            self.colour.iter().map(|&c| gate.is_marker(c)),
-        );
+        // Per pixel: 0 neither, k + 1 marker colour k, CLOTH the cloth's colour.
+        const CLOTH: u8 = u8::MAX;
+        self.codes.clear();
+        self.codes
+            .extend(self.colour.iter().map(|&c| match gate.marker_index(c) {
+                Some(k) => k as u8 + 1,
+                None if gate.is_cloth(c) => CLOTH,
+                None => 0,
+            }));
         integral(
             &mut self.cloth_sum,
             w,
             h,
-            self.colour.iter().map(|&c| gate.is_cloth(c)),
+            self.codes.iter().map(|&c| c == CLOTH),
         );
         let markers = gate.markers();
         self.hue_sums.resize_with(markers, Vec::new);
         for (k, sum) in self.hue_sums.iter_mut().enumerate() {
-            integral(
-                sum,
-                w,
-                h,
-                self.colour.iter().map(|&c| gate.marker_index(c) == Some(k)),
-            );
+            let code = k as u8 + 1;
+            integral(sum, w, h, self.codes.iter().map(|&c| c == code));
         }
         self.pattern.clear();
         let r = pattern_radius(h);
@@ -492,16 +492,17 @@ impl FrameFeatures {
                         - sum[y1 * stride + x0]
                 };
                 let area = ((y1 - y0) * (x1 - x0)) as f32;
-                let own = gate.marker_index(self.colour[y * w + x]);
-                let present = self
-                    .hue_sums
-                    .iter()
-                    .enumerate()
-                    .filter(|&(k, sum)| Some(k) != own && boxed(sum) > 0)
-                    .count();
+                let code = self.codes[y * w + x];
+                let own = (code != CLOTH && code > 0).then(|| code as usize - 1);
+                let (mut markers_seen, mut present) = (0u32, 0usize);
+                for (k, sum) in self.hue_sums.iter().enumerate() {
+                    let n = boxed(sum);
+                    markers_seen += n;
+                    present += (n > 0 && Some(k) != own) as usize;
+                }
                 let (other, mixed) = match own {
                     Some(_) => (boxed(&self.cloth_sum), present >= 1),
-                    None => (boxed(&self.marker_sum), present >= 2),
+                    None => (markers_seen, present >= 2),
                 };
                 self.pattern.push(mixed_pattern_class(
                     pattern_class(other as f32 / area),
@@ -613,6 +614,43 @@ mod tests {
         assert_eq!(f.pattern, vec![4, 4, 4, 4, 3, 3, 5, 5, 0, 0, 0, 0]);
         assert!(!gate.is_marker(classify(123, 184, 64)) && gate.is_cloth(classify(123, 184, 64)));
         assert!(gate.is_marker(classify(38, 191, 191)));
+    }
+
+    #[test]
+    fn the_suit_is_supported_near_its_mixed_pattern() {
+        let suit = crate::suit::SuitDefinition::load_dir(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"),
+        )
+        .expect("suit");
+        let gate = MarkerGate::new(&suit);
+        // The mixed row of the pattern test: classes 4, 4, 4, 4, 3, 3 on the suit-coloured x = 0..=5,
+        // then grey 5, 5, 0, 0, 0, 0.
+        let (red, cyan, green, grey) = (
+            [204u8, 31, 31],
+            [38u8, 191, 191],
+            [123u8, 184, 64],
+            [128u8, 128, 128],
+        );
+        let mut rgb = vec![green; 6];
+        rgb[1] = red;
+        rgb[3] = cyan;
+        rgb.extend([grey; 6]);
+        let mut f = FrameFeatures::default();
+        f.compute(&rgb, 12, 1, &ColourLut::new(), &gate);
+        let (mut distance, mut support) = (Vec::new(), Vec::new());
+        // Seeds x = 0..=5; SUIT_RADIUS = 2 reaches x = 7.
+        suit_support(&f, &gate, None, &mut distance, &mut support);
+        let expect = |n: usize| (0..12).map(|x| x < n).collect::<Vec<bool>>();
+        assert_eq!(support, expect(8));
+        // Seeds only inside a mask of x = 0..=2: support to x = 4.
+        let within = expect(3);
+        suit_support(&f, &gate, Some(&within), &mut distance, &mut support);
+        assert_eq!(support, expect(5));
+        // A lone red marker on the cloth is not the suit's mix: no support at all.
+        rgb[3] = green;
+        f.compute(&rgb, 12, 1, &ColourLut::new(), &gate);
+        suit_support(&f, &gate, None, &mut distance, &mut support);
+        assert_eq!(support, expect(0));
     }
 
     #[test]
