@@ -156,19 +156,43 @@ pub fn part_band(
     distance: &mut Vec<u16>,
     band: &mut Vec<bool>,
 ) {
-    distance.clear();
-    distance.extend(
-        suit.iter()
-            .map(|&s| if s { 0 } else { super::features::FAR }),
-    );
-    super::features::chamfer(distance, width, height);
-    let reach = (reach * region_height(suit, width) as f32).ceil() as u32 * 3;
     band.clear();
-    band.extend(
-        suit.iter()
-            .zip(distance.iter())
-            .map(|(&s, &d)| !s && reach > 0 && (d as u32) <= reach),
-    );
+    band.resize(suit.len(), false);
+    let pixels = (reach * region_height(suit, width) as f32).ceil() as usize;
+    if pixels == 0 || width == 0 {
+        return;
+    }
+    // The distance transform on the suit's bounding box grown by the reach: a 3-4 chamfer path no
+    // longer than the reach stays within it, so the band is the same as on the whole image.
+    let (mut x0, mut y0, mut x1, mut y1) = (width, height, 0, 0);
+    for (i, _) in suit.iter().enumerate().filter(|(_, &s)| s) {
+        let (x, y) = (i % width, i / width);
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    let (x0, y0) = (x0.saturating_sub(pixels), y0.saturating_sub(pixels));
+    let (x1, y1) = ((x1 + pixels).min(width - 1), (y1 + pixels).min(height - 1));
+    let (bw, bh) = (x1 + 1 - x0, y1 + 1 - y0);
+    distance.clear();
+    for y in y0..=y1 {
+        distance.extend(suit[y * width + x0..=y * width + x1].iter().map(|&s| {
+            if s {
+                0
+            } else {
+                super::features::FAR
+            }
+        }));
+    }
+    super::features::chamfer(distance, bw, bh);
+    let reach = pixels as u32 * 3;
+    for y in 0..bh {
+        for x in 0..bw {
+            let i = (y + y0) * width + x + x0;
+            band[i] = !suit[i] && (distance[y * bw + x] as u32) <= reach;
+        }
+    }
 }
 
 /// Adds to the person the band pixels (see [`part_band`]) that look like a part of the person

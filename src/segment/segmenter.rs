@@ -31,8 +31,8 @@ use super::cleanup::{
     attach_parts, fill_holes, keep_person_region, part_band, CleanupReport, PART_REACH,
 };
 use super::features::{
-    chamfer, colour_index, contrast_bin, downscale, is_suit_pattern, suit_support, temporal_bin,
-    ColourLut, FrameFeatures, MarkerGate, COLOUR_BINS, FAR, PATTERN_CLASSES, TEMPORAL_BINS,
+    chamfer, colour_index, contrast_bin, downscale, is_suit_pattern, temporal_bin, ColourLut,
+    FrameFeatures, MarkerGate, COLOUR_BINS, FAR, PATTERN_CLASSES, TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
 use super::tables::SegmenterTables;
@@ -394,16 +394,47 @@ impl Segmenter {
 
         let started = Instant::now();
         // The suit is where its pattern is: cut pixels far from any pixel of the pattern are not it
-        // (a yellow-green or orange region next to the suit that the smoothness pulled in).
-        suit_support(
-            &self.features,
-            &self.gate,
-            None,
-            &mut self.distance,
-            &mut self.band,
-        );
-        for (l, &s) in labels.iter_mut().zip(&self.band) {
-            *l &= s;
+        // (a yellow-green or orange region next to the suit that the smoothness pulled in). This is
+        // `features::suit_support` on the cut's pixels only: a 3-4 chamfer distance of at most
+        // 3 · SUIT_RADIUS = 6 is one of these 13 offsets.
+        {
+            let (colours, pattern, gate) =
+                (&self.features.colour, &self.features.pattern, &self.gate);
+            let seed = |j: usize| {
+                is_suit_pattern(pattern[j], 1)
+                    && (gate.is_cloth(colours[j]) || gate.is_marker(colours[j]))
+            };
+            const NEAR: [(isize, isize); 13] = [
+                (0, 0),
+                (-1, 0),
+                (1, 0),
+                (0, -1),
+                (0, 1),
+                (-1, -1),
+                (1, -1),
+                (-1, 1),
+                (1, 1),
+                (-2, 0),
+                (2, 0),
+                (0, -2),
+                (0, 2),
+            ];
+            debug_assert_eq!(super::features::SUIT_RADIUS, 2);
+            for y in 0..h {
+                for x in 0..w {
+                    let i = y * w + x;
+                    if labels[i] {
+                        labels[i] = NEAR.iter().any(|&(dx, dy)| {
+                            let (nx, ny) = (x as isize + dx, y as isize + dy);
+                            nx >= 0
+                                && ny >= 0
+                                && (nx as usize) < w
+                                && (ny as usize) < h
+                                && seed(ny as usize * w + nx as usize)
+                        });
+                    }
+                }
+            }
         }
         let n = (w * h) as f32;
         let (colours, pattern) = (&self.features.colour, &self.features.pattern);
