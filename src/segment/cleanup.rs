@@ -132,6 +132,112 @@ pub fn fill_holes(
     }
 }
 
+/// How far the person's parts outside the suit (head, hands, shoes) reach from it, as a share of the
+/// suit region's height: the head of an upright person is about an eighth of their height.
+pub const PART_REACH: f32 = 0.15;
+
+/// Rows spanned by the set pixels of `region` (row-major, `width` wide); 0 when none is set.
+pub fn region_height(region: &[bool], width: usize) -> usize {
+    let first = region.iter().position(|&p| p);
+    let last = region.iter().rposition(|&p| p);
+    match (first, last) {
+        (Some(a), Some(b)) => b / width - a / width + 1,
+        _ => 0,
+    }
+}
+
+/// The attachment band: pixels not in `suit` within `reach` (e.g. [`PART_REACH`]) of the suit
+/// region's height of it (3-4 chamfer distance, written to `distance`).
+pub fn part_band(
+    suit: &[bool],
+    width: usize,
+    height: usize,
+    reach: f32,
+    distance: &mut Vec<u16>,
+    band: &mut Vec<bool>,
+) {
+    band.clear();
+    band.resize(suit.len(), false);
+    let pixels = (reach * region_height(suit, width) as f32).ceil() as usize;
+    if pixels == 0 || width == 0 {
+        return;
+    }
+    // The distance transform on the suit's bounding box grown by the reach: a 3-4 chamfer path no
+    // longer than the reach stays within it, so the band is the same as on the whole image.
+    let (mut x0, mut y0, mut x1, mut y1) = (width, height, 0, 0);
+    for (i, _) in suit.iter().enumerate().filter(|(_, &s)| s) {
+        let (x, y) = (i % width, i / width);
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    let (x0, y0) = (x0.saturating_sub(pixels), y0.saturating_sub(pixels));
+    let (x1, y1) = ((x1 + pixels).min(width - 1), (y1 + pixels).min(height - 1));
+    let (bw, bh) = (x1 + 1 - x0, y1 + 1 - y0);
+    distance.clear();
+    for y in y0..=y1 {
+        distance.extend(suit[y * width + x0..=y * width + x1].iter().map(|&s| {
+            if s {
+                0
+            } else {
+                super::features::FAR
+            }
+        }));
+    }
+    super::features::chamfer(distance, bw, bh);
+    let reach = pixels as u32 * 3;
+    for y in 0..bh {
+        for x in 0..bw {
+            let i = (y + y0) * width + x + x0;
+            band[i] = !suit[i] && (distance[y * bw + x] as u32) <= reach;
+        }
+    }
+}
+
+/// Adds to the person the band pixels (see [`part_band`]) that look like a part of the person
+/// (`part_like`) and are 4-connected to the suit through such pixels; `person` starts as the suit
+/// and ends as suit + parts, `part` marks the added pixels. Returns how many were added.
+pub fn attach_parts(
+    person: &mut [bool],
+    band: &[bool],
+    width: usize,
+    height: usize,
+    part_like: impl Fn(usize) -> bool,
+    part: &mut Vec<bool>,
+    stack: &mut Vec<usize>,
+) -> usize {
+    part.clear();
+    part.resize(person.len(), false);
+    stack.clear();
+    stack.extend((0..person.len()).filter(|&i| person[i]));
+    let mut added = 0;
+    while let Some(i) = stack.pop() {
+        let (x, y) = (i % width, i / width);
+        let mut visit = |j: usize| {
+            if band[j] && !person[j] && part_like(j) {
+                person[j] = true;
+                part[j] = true;
+                added += 1;
+                stack.push(j);
+            }
+        };
+        if x > 0 {
+            visit(i - 1);
+        }
+        if x + 1 < width {
+            visit(i + 1);
+        }
+        if y > 0 {
+            visit(i - width);
+        }
+        if y + 1 < height {
+            visit(i + width);
+        }
+    }
+    added
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -181,6 +287,34 @@ mod tests {
         let mut ids = Vec::new();
         keep_person_region(&mut m, w, h, |_| 1.0, 2, &mut ids);
         assert!(m.iter().all(|&p| !p));
+    }
+
+    #[test]
+    fn parts_attach_within_the_band_and_only_through_part_like_pixels() {
+        // An 8-row suit column at x = 1..=2; PART_REACH · 8 = 1.2 → a reach of 2 pixels (chamfer 6).
+        let (suit, w, h) = grid(&[
+            "........", ".##.....", ".##.....", ".##.....", ".##.....", ".##.....", ".##.....",
+            ".##.....", ".##.....", "........",
+        ]);
+        assert_eq!(region_height(&suit, w), 8);
+        let (mut distance, mut band) = (Vec::new(), Vec::new());
+        part_band(&suit, w, h, PART_REACH, &mut distance, &mut band);
+        // Row 1: x = 0 (1 px), 3 (1 px), 4 (2 px) are in the band, 5 (3 px) is not.
+        assert_eq!(
+            &band[w..2 * w],
+            &[true, false, false, true, true, false, false, false]
+        );
+        // Part-like: everything in row 1 and x = 6 of row 5 (in no band: never reached).
+        let like = |i: usize| i / w == 1 || i == 5 * w + 6;
+        let mut person = suit.clone();
+        let (mut part, mut stack) = (Vec::new(), Vec::new());
+        let added = attach_parts(&mut person, &band, w, h, like, &mut part, &mut stack);
+        assert_eq!(added, 3);
+        assert_eq!(
+            &person[w..2 * w],
+            &[true, true, true, true, true, false, false, false]
+        );
+        assert!(part[w] && part[w + 3] && part[w + 4] && !part[w + 1] && !part[5 * w + 6]);
     }
 
     #[test]

@@ -34,10 +34,33 @@ pub const CONTRAST_BINS: usize = DHUE_BINS * DSAT_BINS;
 pub const GRADIENT_BINS: usize = 8;
 /// Temporal difference bins (0, 3, 6, 12, 24, 48, 96).
 pub const TEMPORAL_BINS: usize = 7;
-/// Pattern classes: how much of the other half of the suit's pattern surrounds a pixel. For a
-/// marker-coloured pixel, the share of cloth-coloured pixels in the window around it; for any other
-/// pixel, the share of marker-coloured pixels: 0, up to 6 %, up to 14 %, up to 25 %, more.
-pub const PATTERN_CLASSES: usize = 5;
+/// Pattern classes: how much of the other half of the suit's pattern surrounds a pixel, and whether
+/// it is the suit's mix of marker hues. For a marker-coloured pixel, the share of cloth-coloured
+/// pixels in the window around it, mixed when a marker of another hue is in the window too; for any
+/// other pixel, the share of marker-coloured pixels, mixed when markers of at least two hues are.
+/// Classes 0–4: no other half, mixed with up to 6 %, up to 14 %, up to 25 %, more; 5 and 6: one hue
+/// only, up to 14 % and more. The suit's markers take their hues at random from the suit's colours,
+/// so a window of the suit almost always sees two of them; an orange, a tabby cat or a red poster
+/// next to something yellow sees only one.
+pub const PATTERN_CLASSES: usize = 7;
+
+/// The pattern class of a share class (0–4 from [`pattern_class`]) and whether the hues are mixed.
+#[inline]
+pub fn mixed_pattern_class(share: u8, mixed: bool) -> u8 {
+    match (share, mixed) {
+        (0, _) => 0,
+        (s, true) => s,
+        (1 | 2, false) => 5,
+        (_, false) => 6,
+    }
+}
+
+/// Is this pattern class the suit's own interleaving of cloth and mixed markers with at least
+/// `share` (a class 1–4)?
+#[inline]
+pub fn is_suit_pattern(class: u8, share: u8) -> bool {
+    (share..=4).contains(&class)
+}
 /// Half-width of the pattern window: a 60th of the cut's height, at least 4 pixels (a 9 × 9 window at
 /// 320 × 240). The person fills a similar share of the picture at any resolution, so the window
 /// spans a similar number of marker pitches.
@@ -72,6 +95,9 @@ pub fn colour_index(colour: PixelColour, pattern: u8) -> usize {
 #[derive(Clone, Debug)]
 pub struct MarkerGate {
     hue: [bool; 256],
+    /// Index + 1 of the marker colour a hue belongs to (0: none).
+    marker_of: [u8; 256],
+    markers: usize,
     /// Hues of the suit's cloth (its background colour).
     cloth_hue: [bool; 256],
     min_saturation: u8,
@@ -88,6 +114,21 @@ impl MarkerGate {
                     .iter()
                     .any(|m| crate::colour::hue_distance(hue, m.hsv.hue) <= gates.hue_tolerance_deg)
             }),
+            marker_of: std::array::from_fn(|q| {
+                let hue = (q as f32 + 0.5) * 360.0 / 256.0;
+                suit.markers
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, m)| {
+                        crate::colour::hue_distance(hue, m.hsv.hue) <= gates.hue_tolerance_deg
+                    })
+                    .min_by(|a, b| {
+                        crate::colour::hue_distance(hue, a.1.hsv.hue)
+                            .total_cmp(&crate::colour::hue_distance(hue, b.1.hsv.hue))
+                    })
+                    .map_or(0, |(k, _)| (k + 1).min(255) as u8)
+            }),
+            markers: suit.markers.len().min(254),
             cloth_hue: std::array::from_fn(|q| {
                 let hue = (q as f32 + 0.5) * 360.0 / 256.0;
                 crate::colour::hue_distance(hue, suit.background.hsv.hue) <= gates.hue_tolerance_deg
@@ -103,6 +144,21 @@ impl MarkerGate {
             && c.sat >= self.min_saturation
             && c.val >= self.min_value
             && self.hue[c.hue as usize]
+    }
+
+    /// Which of the suit's marker colours the pixel has, if any.
+    #[inline]
+    pub fn marker_index(&self, c: PixelColour) -> Option<usize> {
+        if self.is_marker(c) {
+            (self.marker_of[c.hue as usize] as usize).checked_sub(1)
+        } else {
+            None
+        }
+    }
+
+    /// Number of marker colours of the suit.
+    pub fn markers(&self) -> usize {
+        self.markers
     }
 
     /// Does the pixel have the suit cloth's hue?
@@ -239,8 +295,11 @@ pub struct FrameFeatures {
     pub gradient_magnitude: Vec<u8>,
     /// Pattern class (see [`PATTERN_CLASSES`]), joint with the colour in the colour table.
     pub pattern: Vec<u8>,
-    marker_sum: Vec<u32>,
+    /// Per pixel: which half of the pattern it has (see `compute_pattern`).
+    codes: Vec<u8>,
     cloth_sum: Vec<u32>,
+    /// One summed-area table per marker colour.
+    hue_sums: Vec<Vec<u32>>,
 }
 
 /// Summed-area table of `values` (row-major `w × h`) into `sum`, `(w + 1) × (h + 1)` with a zero border.
@@ -302,6 +361,35 @@ pub fn chamfer(d: &mut [u16], w: usize, h: usize) {
             d[i] = v;
         }
     }
+}
+
+/// Pixels this close (at the cut's resolution) to a pixel of the suit's pattern can be the suit.
+pub const SUIT_RADIUS: u16 = 2;
+
+/// Where the suit can be: pixels within [`SUIT_RADIUS`] of a pixel of the cloth's or a marker's
+/// colour that sees the suit's mixed pattern around it (see [`PATTERN_CLASSES`]; skin has a red
+/// marker's hue, but no mixed markers around it). With `within`, only its set pixels are seeds.
+pub fn suit_support(
+    features: &FrameFeatures,
+    gate: &MarkerGate,
+    within: Option<&[bool]>,
+    distance: &mut Vec<u16>,
+    out: &mut Vec<bool>,
+) {
+    distance.clear();
+    distance.extend(features.colour.iter().enumerate().map(|(i, &c)| {
+        let seed = within.is_none_or(|m| m[i])
+            && is_suit_pattern(features.pattern[i], 1)
+            && (gate.is_cloth(c) || gate.is_marker(c));
+        if seed {
+            0
+        } else {
+            FAR
+        }
+    }));
+    chamfer(distance, features.width, features.height);
+    out.clear();
+    out.extend(distance.iter().map(|&d| d <= 3 * SUIT_RADIUS));
 }
 
 /// Box-downscales `image` by `factor` (1 = copy) into `out` (RGB, row-major).
@@ -370,18 +458,27 @@ impl FrameFeatures {
     /// pattern; inside a red poster or a lawn, or a few pixels off the person, it does not.
     fn compute_pattern(&mut self, gate: &MarkerGate) {
         let (w, h) = (self.width, self.height);
-        integral(
-            &mut self.marker_sum,
-            w,
-            h,
-            self.colour.iter().map(|&c| gate.is_marker(c)),
-        );
+        // Per pixel: 0 neither, k + 1 marker colour k, CLOTH the cloth's colour.
+        const CLOTH: u8 = u8::MAX;
+        self.codes.clear();
+        self.codes
+            .extend(self.colour.iter().map(|&c| match gate.marker_index(c) {
+                Some(k) => k as u8 + 1,
+                None if gate.is_cloth(c) => CLOTH,
+                None => 0,
+            }));
         integral(
             &mut self.cloth_sum,
             w,
             h,
-            self.colour.iter().map(|&c| gate.is_cloth(c)),
+            self.codes.iter().map(|&c| c == CLOTH),
         );
+        let markers = gate.markers();
+        self.hue_sums.resize_with(markers, Vec::new);
+        for (k, sum) in self.hue_sums.iter_mut().enumerate() {
+            let code = k as u8 + 1;
+            integral(sum, w, h, self.codes.iter().map(|&c| c == code));
+        }
         self.pattern.clear();
         let r = pattern_radius(h);
         let stride = w + 1;
@@ -395,12 +492,22 @@ impl FrameFeatures {
                         - sum[y1 * stride + x0]
                 };
                 let area = ((y1 - y0) * (x1 - x0)) as f32;
-                let other = if gate.is_marker(self.colour[y * w + x]) {
-                    boxed(&self.cloth_sum)
-                } else {
-                    boxed(&self.marker_sum)
+                let code = self.codes[y * w + x];
+                let own = (code != CLOTH && code > 0).then(|| code as usize - 1);
+                let (mut markers_seen, mut present) = (0u32, 0usize);
+                for (k, sum) in self.hue_sums.iter().enumerate() {
+                    let n = boxed(sum);
+                    markers_seen += n;
+                    present += (n > 0 && Some(k) != own) as usize;
+                }
+                let (other, mixed) = match own {
+                    Some(_) => (boxed(&self.cloth_sum), present >= 1),
+                    None => (markers_seen, present >= 2),
                 };
-                self.pattern.push(pattern_class(other as f32 / area));
+                self.pattern.push(mixed_pattern_class(
+                    pattern_class(other as f32 / area),
+                    mixed,
+                ));
             }
         }
     }
@@ -493,12 +600,57 @@ mod tests {
         }
         let mut f = FrameFeatures::default();
         f.compute(&rgb, 12, 1, &ColourLut::new(), &gate);
-        // Window x−4..=x+4 clipped to the row. x = 0: 1 marker in 5 pixels (20 %) → class 3. The
-        // marker (x = 1) sees 5 cloth pixels of 6 → class 4. x = 5: 1 of 9 (11 %) → class 2.
+        // Window x−4..=x+4 clipped to the row. x = 0: 1 marker in 5 pixels (20 %), share class 3,
+        // but one hue only → class 6. The marker (x = 1) sees 5 cloth pixels of 6 (class 4) and no
+        // marker of another hue → 6. x = 5: 1 of 9 (11 %), share class 2, one hue → 5.
         // x = 6 (grey) no longer sees the marker (its window starts at 2) → class 0.
-        assert_eq!(f.pattern, vec![3, 4, 3, 2, 2, 2, 0, 0, 0, 0, 0, 0]);
+        assert_eq!(f.pattern, vec![6, 6, 6, 5, 5, 5, 0, 0, 0, 0, 0, 0]);
+        // A cyan marker at x = 3 mixes the hues. Cloth x = 0: 2 markers of 5 pixels (40 %) → 4;
+        // x = 2: 2 of 7 (29 %) → 4; x = 4 and 5: 2 of 9 (22 %) → 3. Each marker sees the other, and
+        // its cloth share (x = 1: 4 of 6; x = 3: 4 of 8) is class 4 → 4. The grey x = 6 and 7 see the
+        // cyan marker only (1 of 9, 11 %) → 5; x = 8 (window 4..=11) sees none → 0.
+        rgb[3] = [38, 191, 191];
+        f.compute(&rgb, 12, 1, &ColourLut::new(), &gate);
+        assert_eq!(f.pattern, vec![4, 4, 4, 4, 3, 3, 5, 5, 0, 0, 0, 0]);
         assert!(!gate.is_marker(classify(123, 184, 64)) && gate.is_cloth(classify(123, 184, 64)));
         assert!(gate.is_marker(classify(38, 191, 191)));
+    }
+
+    #[test]
+    fn the_suit_is_supported_near_its_mixed_pattern() {
+        let suit = crate::suit::SuitDefinition::load_dir(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"),
+        )
+        .expect("suit");
+        let gate = MarkerGate::new(&suit);
+        // The mixed row of the pattern test: classes 4, 4, 4, 4, 3, 3 on the suit-coloured x = 0..=5,
+        // then grey 5, 5, 0, 0, 0, 0.
+        let (red, cyan, green, grey) = (
+            [204u8, 31, 31],
+            [38u8, 191, 191],
+            [123u8, 184, 64],
+            [128u8, 128, 128],
+        );
+        let mut rgb = vec![green; 6];
+        rgb[1] = red;
+        rgb[3] = cyan;
+        rgb.extend([grey; 6]);
+        let mut f = FrameFeatures::default();
+        f.compute(&rgb, 12, 1, &ColourLut::new(), &gate);
+        let (mut distance, mut support) = (Vec::new(), Vec::new());
+        // Seeds x = 0..=5; SUIT_RADIUS = 2 reaches x = 7.
+        suit_support(&f, &gate, None, &mut distance, &mut support);
+        let expect = |n: usize| (0..12).map(|x| x < n).collect::<Vec<bool>>();
+        assert_eq!(support, expect(8));
+        // Seeds only inside a mask of x = 0..=2: support to x = 4.
+        let within = expect(3);
+        suit_support(&f, &gate, Some(&within), &mut distance, &mut support);
+        assert_eq!(support, expect(5));
+        // A lone red marker on the cloth is not the suit's mix: no support at all.
+        rgb[3] = green;
+        f.compute(&rgb, 12, 1, &ColourLut::new(), &gate);
+        suit_support(&f, &gate, None, &mut distance, &mut support);
+        assert_eq!(support, expect(0));
     }
 
     #[test]

@@ -5,8 +5,9 @@
 //! 2. builds the graph: unaries `σ_C·C + σ_G·G + σ_M·M + σ_T·T` per pixel (the motion and temporal terms
 //!    use the segmenter's own masks of the previous one and two frames; the first frame uses the label
 //!    prior and the second the terms it has), pairwise weights from the neighbourhood table on the four
-//!    axial edges (a label-pair energy A, B, D becomes an edge weight (2B − A − D)/2 plus (D − A)/2 on
-//!    both nodes' person cost);
+//!    axial edges (a label-pair energy A, B, D becomes an edge weight (2B − A − D)/2; the (D − A)/2 it
+//!    would add to both nodes' person cost is left out, see [`Segmenter::new`]). The cut looks for the
+//!    suit: its colour table is trained on the suit part of the masks only;
 //! 3. cuts it with [`GridMaxFlow`] (the search buffers are reused from frame to frame);
 //!    the background's colour likelihood mixes the trained table with a background colour histogram
 //!    learned online from this stream's own confident background pixels (more than
@@ -14,7 +15,9 @@
 //!    [`SegmenterOptions::adapt_rate`] per frame), as bilayer segmenters do: the 20 training frames
 //!    cannot show the room the suit will be used in, the stream itself does after one frame;
 //! 4. keeps the connected region that carries the most suit cloth next to markers, fills its small holes
-//!    ([`cleanup`](super::cleanup)), and reports what that changed;
+//!    ([`cleanup`](super::cleanup)), and reports what that changed; then attaches the head, hands and
+//!    shoes: pixels of a band around the suit ([`SegmenterOptions::part_reach`]) connected to it whose
+//!    colour is likelier under the learned part table than under the (online) background;
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut.
 //!
@@ -24,10 +27,12 @@ use std::time::Instant;
 
 use image::RgbImage;
 
-use super::cleanup::{fill_holes, keep_person_region, CleanupReport};
+use super::cleanup::{
+    attach_parts, fill_holes, keep_person_region, part_band, CleanupReport, PART_REACH,
+};
 use super::features::{
-    chamfer, colour_index, contrast_bin, downscale, temporal_bin, ColourLut, FrameFeatures,
-    MarkerGate, COLOUR_BINS, FAR, PATTERN_CLASSES, TEMPORAL_BINS,
+    chamfer, colour_index, contrast_bin, downscale, is_suit_pattern, temporal_bin, ColourLut,
+    FrameFeatures, MarkerGate, COLOUR_BINS, FAR, PATTERN_CLASSES, TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
 use super::tables::SegmenterTables;
@@ -43,12 +48,17 @@ pub struct SegmenterOptions {
     pub max_hole_fraction: f32,
     /// Weight of the upsampled cut against the full-resolution colour in the boundary band (nats).
     pub refine_prior: f32,
+    /// Widen the boundary band to the cells next to a label change, not only those across it.
+    pub refine_wide: bool,
     /// Share of the online background histogram that each new frame replaces (0 = no adaptation).
     pub adapt_rate: f32,
     /// Background pixels closer than this to the person (at the cut's resolution) are not learned.
     pub adapt_margin: u32,
     /// Weight of the online histogram in the background colour likelihood once it exists.
     pub adapt_share: f32,
+    /// How far the head, hands and shoes are looked for around the suit, as a share of the suit
+    /// region's height (0: the mask is the suit only).
+    pub part_reach: f32,
 }
 
 impl Default for SegmenterOptions {
@@ -57,9 +67,11 @@ impl Default for SegmenterOptions {
             min_person_fraction: 0.002,
             max_hole_fraction: 0.001,
             refine_prior: 3.0,
+            refine_wide: true,
             adapt_rate: 0.3,
             adapt_margin: 4,
             adapt_share: 0.7,
+            part_reach: PART_REACH,
         }
     }
 }
@@ -95,9 +107,8 @@ pub struct Segmenter {
     tables: SegmenterTables,
     options: SegmenterOptions,
     lut: ColourLut,
-    /// Per contrast bin: edge weight and the person-cost adjustment of both endpoints.
+    /// Per contrast bin: the edge weight.
     edge_weight: Vec<f32>,
-    edge_adjust: Vec<f32>,
     gate: MarkerGate,
     maxflow: GridMaxFlow,
     graph: GridGraph,
@@ -114,7 +125,24 @@ pub struct Segmenter {
     background_colour: Vec<f32>,
     /// p(pattern class | background) of the trained table.
     background_pattern: [f32; PATTERN_CLASSES],
+    /// Background colour NLL per colour bin (the pattern classes summed), trained and online mixed.
+    background_bin: Vec<f32>,
     distance: Vec<u16>,
+    band: Vec<bool>,
+    part: Vec<bool>,
+    stack: Vec<usize>,
+}
+
+/// −ln Σ_class p(class · COLOUR_BINS + bin) of a joint colour × pattern NLL table.
+fn marginal_nll(joint: &[f32]) -> Vec<f32> {
+    (0..COLOUR_BINS)
+        .map(|bin| {
+            let p: f32 = (0..PATTERN_CLASSES)
+                .map(|c| (-joint[c * COLOUR_BINS + bin]).exp())
+                .sum();
+            -(p.max(1e-6)).ln()
+        })
+        .collect()
 }
 
 impl Segmenter {
@@ -124,13 +152,15 @@ impl Segmenter {
         options: SegmenterOptions,
     ) -> Segmenter {
         // Pairwise energies A (both background), B (different), D (both person) per contrast bin,
-        // each −ln p(contrast | pair) − ln p(pair equal or different).
+        // each −ln p(contrast | pair) − ln p(pair equal or different); the edge weight is
+        // (2B − A − D)/2. The rest of the pair energy, (D − A)/2 on both nodes' person cost, would say
+        // how smooth the person is against the training room; a new room is smoother or rougher, so
+        // it is left out (with it, a smooth orange or a cat's fur next to the suit became person).
         let n = &tables.neighbourhood;
         let sigma = tables.weights.neighbourhood;
         let [equal, different] = tables.pair_prior;
         let bins = n[0].len();
         let mut edge_weight = Vec::with_capacity(bins);
-        let mut edge_adjust = Vec::with_capacity(bins);
         for k in 0..bins {
             let (a, b, d) = (
                 n[0][k] + equal,
@@ -138,7 +168,6 @@ impl Segmenter {
                 n[3][k] + equal,
             );
             edge_weight.push(sigma * (0.5 * (2.0 * b - a - d)).max(0.0));
-            edge_adjust.push(sigma * 0.5 * (d - a));
         }
         let background_pattern = std::array::from_fn(|class| {
             tables.colour[0][class * COLOUR_BINS..(class + 1) * COLOUR_BINS]
@@ -147,12 +176,12 @@ impl Segmenter {
                 .sum::<f32>()
         });
         let background_colour = tables.colour[0].clone();
+        let background_bin = marginal_nll(&tables.colour[0]);
         Segmenter {
             tables,
             options,
             lut: ColourLut::new(),
             edge_weight,
-            edge_adjust,
             gate: MarkerGate::new(suit),
             maxflow: GridMaxFlow::new(),
             graph: GridGraph::new(0, 0),
@@ -166,7 +195,11 @@ impl Segmenter {
             online_background: None,
             background_colour,
             background_pattern,
+            background_bin,
             distance: Vec::new(),
+            band: Vec::new(),
+            part: Vec::new(),
+            stack: Vec::new(),
         }
     }
 
@@ -181,6 +214,7 @@ impl Segmenter {
         self.before_previous_mask = None;
         self.online_background = None;
         self.background_colour.clone_from(&self.tables.colour[0]);
+        self.background_bin = marginal_nll(&self.tables.colour[0]);
     }
 
     /// Learns the background colours of this frame from pixels well away from the person and
@@ -226,6 +260,11 @@ impl Segmenter {
                     (1.0 - share) * trained + share * online[bin] * self.background_pattern[class];
                 self.background_colour[k] = -(p.max(1e-6)).ln();
             }
+        }
+        let trained = marginal_nll(&self.tables.colour[0]);
+        for (bin, v) in self.background_bin.iter_mut().enumerate() {
+            let p = (1.0 - share) * (-trained[bin]).exp() + share * online[bin];
+            *v = -(p.max(1e-6)).ln();
         }
         self.online_background = Some(online);
     }
@@ -298,14 +337,10 @@ impl Segmenter {
                 if x + 1 < w {
                     let bin = contrast_bin(f.colour[i], f.colour[i + 1]);
                     right[y * (w - 1) + x] = self.edge_weight[bin];
-                    self.unary[i][1] += self.edge_adjust[bin];
-                    self.unary[i + 1][1] += self.edge_adjust[bin];
                 }
                 if y + 1 < h {
                     let bin = contrast_bin(f.colour[i], f.colour[i + w]);
                     down[i] = self.edge_weight[bin];
-                    self.unary[i][1] += self.edge_adjust[bin];
-                    self.unary[i + w][1] += self.edge_adjust[bin];
                 }
             }
         }
@@ -318,6 +353,29 @@ impl Segmenter {
 
     /// Segments one frame.
     pub fn segment(&mut self, frame: &RgbImage) -> Segmentation {
+        if self.online_background.is_none()
+            && self.previous.is_none()
+            && self.options.adapt_rate > 0.0
+        {
+            // The first frame of a stream: no background seen yet. Segment it once to learn the
+            // room's colours away from the person, then again with them.
+            let first = self.segment_once(frame);
+            self.previous = None;
+            self.previous_mask = None;
+            self.before_previous_mask = None;
+            let mut second = self.segment_once(frame);
+            let (a, b) = (first.times, &mut second.times);
+            b.features += a.features;
+            b.graph += a.graph;
+            b.cut += a.cut;
+            b.cleanup += a.cleanup;
+            b.refine += a.refine;
+            return second;
+        }
+        self.segment_once(frame)
+    }
+
+    fn segment_once(&mut self, frame: &RgbImage) -> Segmentation {
         let mut times = StageTimes::default();
         let started = Instant::now();
         let (w, h) = downscale(frame, self.tables.downscale, &mut self.small);
@@ -335,6 +393,49 @@ impl Segmenter {
         let mut labels = result.labels;
 
         let started = Instant::now();
+        // The suit is where its pattern is: cut pixels far from any pixel of the pattern are not it
+        // (a yellow-green or orange region next to the suit that the smoothness pulled in). This is
+        // `features::suit_support` on the cut's pixels only: a 3-4 chamfer distance of at most
+        // 3 · SUIT_RADIUS = 6 is one of these 13 offsets.
+        {
+            let (colours, pattern, gate) =
+                (&self.features.colour, &self.features.pattern, &self.gate);
+            let seed = |j: usize| {
+                is_suit_pattern(pattern[j], 1)
+                    && (gate.is_cloth(colours[j]) || gate.is_marker(colours[j]))
+            };
+            const NEAR: [(isize, isize); 13] = [
+                (0, 0),
+                (-1, 0),
+                (1, 0),
+                (0, -1),
+                (0, 1),
+                (-1, -1),
+                (1, -1),
+                (-1, 1),
+                (1, 1),
+                (-2, 0),
+                (2, 0),
+                (0, -2),
+                (0, 2),
+            ];
+            debug_assert_eq!(super::features::SUIT_RADIUS, 2);
+            for y in 0..h {
+                for x in 0..w {
+                    let i = y * w + x;
+                    if labels[i] {
+                        labels[i] = NEAR.iter().any(|&(dx, dy)| {
+                            let (nx, ny) = (x as isize + dx, y as isize + dy);
+                            nx >= 0
+                                && ny >= 0
+                                && (nx as usize) < w
+                                && (ny as usize) < h
+                                && seed(ny as usize * w + nx as usize)
+                        });
+                    }
+                }
+            }
+        }
         let n = (w * h) as f32;
         let (colours, pattern) = (&self.features.colour, &self.features.pattern);
         let mut ids = std::mem::take(&mut self.ids);
@@ -345,7 +446,7 @@ impl Segmenter {
             // Suit cloth next to a marker: what only the suit looks like (a red poster is all marker
             // colour, a lawn all cloth colour, neither has the two interleaved).
             |i| {
-                if pattern[i] >= 3 && self.gate.is_cloth(colours[i]) {
+                if is_suit_pattern(pattern[i], 3) && self.gate.is_cloth(colours[i]) {
                     1.0
                 } else {
                     0.01
@@ -362,15 +463,53 @@ impl Segmenter {
             &mut ids,
             &mut report,
         );
+        // The parts outside the suit: band pixels whose colour is likelier a part than background.
+        let mut person = labels.clone();
+        part_band(
+            &labels,
+            w,
+            h,
+            self.options.part_reach,
+            &mut self.distance,
+            &mut self.band,
+        );
+        let sigma = self.tables.weights.colour;
+        let (part_nll, prior, bg) = (
+            &self.tables.part,
+            self.tables.part_prior,
+            &self.background_bin,
+        );
+        let added = attach_parts(
+            &mut person,
+            &self.band,
+            w,
+            h,
+            |i| {
+                let bin = colours[i].bin as usize;
+                sigma * part_nll[bin] + prior[1] < sigma * bg[bin] + prior[0]
+            },
+            &mut self.part,
+            &mut self.stack,
+        );
+        if added > 0 {
+            fill_holes(
+                &mut person,
+                w,
+                h,
+                (self.options.max_hole_fraction * n) as usize,
+                &mut ids,
+                &mut report,
+            );
+        }
         self.ids = ids;
         times.cleanup = ms(started);
 
         let started = Instant::now();
-        let mask = self.refine(frame, &labels, w, h);
+        let mask = self.refine(frame, &person, w, h);
         times.refine = ms(started);
 
         // History for the next frame.
-        self.adapt_background(&labels);
+        self.adapt_background(&person);
         self.before_previous_mask = self.previous_mask.take();
         self.previous_mask = Some(labels);
         std::mem::swap(
@@ -402,6 +541,27 @@ impl Segmenter {
         let sigma = self.tables.weights.colour;
         let prior = self.options.refine_prior;
         let raw = frame.as_raw();
+        // Low-resolution pixels with a differently labelled pixel among their 8 neighbours: with a
+        // wide band, the cells around them are decided per pixel too (the cut, at half the
+        // resolution, can be a pixel off, and that pixel is two at full resolution).
+        let wide = self.options.refine_wide;
+        let mut near = Vec::new();
+        if wide {
+            near.resize(w * h, false);
+            for y in 0..h {
+                for x in 0..w {
+                    let l = labels[y * w + x];
+                    'n: for ny in y.saturating_sub(1)..(y + 2).min(h) {
+                        for nx in x.saturating_sub(1)..(x + 2).min(w) {
+                            if labels[ny * w + nx] != l {
+                                near[y * w + x] = true;
+                                break 'n;
+                            }
+                        }
+                    }
+                }
+            }
+        }
         let fw_us = fw as usize;
         // Output columns grouped by the low-resolution column pair they interpolate between.
         let column = |x: usize| ((x as f32 + 0.5) / f - 0.5).clamp(0.0, (w - 1) as f32);
@@ -425,7 +585,13 @@ impl Segmenter {
                     labels[y1 * w + x0],
                     labels[y1 * w + x1],
                 ];
-                if corners.iter().all(|&c| c == corners[0]) {
+                let uniform = corners.iter().all(|&c| c == corners[0]);
+                let close = wide
+                    && (near[y0 * w + x0]
+                        || near[y0 * w + x1]
+                        || near[y1 * w + x0]
+                        || near[y1 * w + x1]);
+                if uniform && !close {
                     row[x..end].fill(corners[0]);
                     x = end;
                     continue;
@@ -436,9 +602,9 @@ impl Segmenter {
                     let l = |c: bool| c as u8 as f32;
                     let m = (l(corners[0]) * (1.0 - tx) + l(corners[1]) * tx) * (1.0 - ty)
                         + (l(corners[2]) * (1.0 - tx) + l(corners[3]) * tx) * ty;
-                    *value = if m <= 0.0 {
+                    *value = if m <= 0.0 && !close {
                         false
-                    } else if m >= 1.0 {
+                    } else if m >= 1.0 && !close {
                         true
                     } else {
                         let p = (y * fw_us + xx) * 3;
@@ -446,7 +612,13 @@ impl Segmenter {
                         let near =
                             (sx.round() as usize).min(w - 1) + (sy.round() as usize).min(h - 1) * w;
                         let k = colour_index(c, self.pattern_at(near));
-                        let e_fg = sigma * self.tables.colour[1][k] + prior * (1.0 - m);
+                        let suit = sigma * self.tables.colour[1][k];
+                        let fg = if self.part.get(near).copied().unwrap_or(false) {
+                            suit.min(sigma * self.tables.part[c.bin as usize])
+                        } else {
+                            suit
+                        };
+                        let e_fg = fg + prior * (1.0 - m);
                         let e_bg = sigma * self.background_colour[k] + prior * m;
                         e_fg < e_bg
                     };

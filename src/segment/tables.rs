@@ -29,7 +29,7 @@ use crate::model::{ModelError, ModelFile};
 
 pub const SEGMENTER_KIND: &str = "segmenter";
 /// Version of the segmenter model file; bump when the features or tables change.
-pub const SEGMENTER_VERSION: u32 = 5;
+pub const SEGMENTER_VERSION: u32 = 6;
 /// Model file name inside a suit directory.
 pub const SEGMENTER_FILE: &str = "segmenter.bin";
 
@@ -99,6 +99,11 @@ pub struct SegmenterTables {
     pub motion: [Vec<f32>; 4],
     /// `[4·label_t + 2·label_t−1 + label_t−2]`.
     pub temporal: [f32; 8],
+    /// `−ln p(colour bin | part)`: the person's parts outside the suit (head, hands, shoes), broadly
+    /// smoothed (another person's skin is lighter or darker than the trained one's).
+    pub part: Vec<f32>,
+    /// `−ln p(background)`, `−ln p(part)` of a non-suit pixel within the attachment band of the suit.
+    pub part_prior: [f32; 2],
     pub weights: Weights,
 }
 
@@ -111,6 +116,9 @@ pub struct TableCounts {
     gradient: [Vec<f64>; 2],
     motion: [Vec<f64>; 4],
     temporal: [f64; 8],
+    part: Vec<f64>,
+    /// Non-suit pixels of the attachment band: background, part.
+    band: [f64; 2],
 }
 
 impl Default for TableCounts {
@@ -125,6 +133,8 @@ impl Default for TableCounts {
             ],
             motion: std::array::from_fn(|_| vec![0.0; GRADIENT_BINS * TEMPORAL_BINS]),
             temporal: [0.0; 8],
+            part: vec![0.0; COLOUR_BINS],
+            band: [0.0; 2],
         }
     }
 }
@@ -150,62 +160,81 @@ fn nll_mixed(counts: &[f64], alpha: f64, uniform: f64) -> Vec<f32> {
 /// Uniform share of the background's colour and gradient tables, and of the person's.
 pub const BACKGROUND_UNIFORM: f64 = 0.5;
 pub const PERSON_UNIFORM: f64 = 0.02;
+/// Uniform share of the part table, and how many times its counts are smoothed along hue,
+/// saturation and value: the training frames show one person's skin, hair and shoes; the suit will
+/// be worn by others, whose skin is lighter or darker (value, saturation) more than another hue.
+pub const PART_UNIFORM: f64 = 0.05;
+pub const PART_SMOOTHING: [usize; 3] = [0, 1, 3];
 
 /// Spreads colour counts to the neighbouring bins with weights ¼ ½ ¼ along hue (circularly),
 /// saturation and value (and along value for the achromatic bins), so that a change of light that
 /// shifts a colour by a bin does not fall into an empty one.
 fn smooth_colour(counts: &[f64]) -> Vec<f64> {
+    smooth_colour_axes(counts, 1, 1, 1)
+}
+
+/// [`smooth_colour`] with a number of ¼ ½ ¼ passes per axis (hue, saturation, value; the
+/// achromatic bins take the value passes).
+fn smooth_colour_axes(counts: &[f64], hue: usize, sat: usize, val: usize) -> Vec<f64> {
     let chromatic = HUE_BINS * SAT_BINS * VAL_BINS;
     let index = |h: usize, s: usize, v: usize| (h * SAT_BINS + s) * VAL_BINS + v;
     let mut a = counts.to_vec();
     let mut b = counts.to_vec();
-    // Along hue.
-    for h in 0..HUE_BINS {
-        for s in 0..SAT_BINS {
-            for v in 0..VAL_BINS {
-                let (hp, hn) = ((h + HUE_BINS - 1) % HUE_BINS, (h + 1) % HUE_BINS);
-                b[index(h, s, v)] =
-                    0.5 * a[index(h, s, v)] + 0.25 * (a[index(hp, s, v)] + a[index(hn, s, v)]);
-            }
-        }
-    }
-    std::mem::swap(&mut a, &mut b);
-    // Along saturation and value (clamped at the ends).
     let clamp_step = |k: usize, n: usize| (k.saturating_sub(1), (k + 1).min(n - 1));
-    for h in 0..HUE_BINS {
-        for s in 0..SAT_BINS {
-            for v in 0..VAL_BINS {
-                let (sp, sn) = clamp_step(s, SAT_BINS);
-                b[index(h, s, v)] =
-                    0.5 * a[index(h, s, v)] + 0.25 * (a[index(h, sp, v)] + a[index(h, sn, v)]);
+    for _ in 0..hue {
+        for h in 0..HUE_BINS {
+            for s in 0..SAT_BINS {
+                for v in 0..VAL_BINS {
+                    let (hp, hn) = ((h + HUE_BINS - 1) % HUE_BINS, (h + 1) % HUE_BINS);
+                    b[index(h, s, v)] =
+                        0.5 * a[index(h, s, v)] + 0.25 * (a[index(hp, s, v)] + a[index(hn, s, v)]);
+                }
             }
         }
+        std::mem::swap(&mut a, &mut b);
     }
-    std::mem::swap(&mut a, &mut b);
-    for h in 0..HUE_BINS {
-        for s in 0..SAT_BINS {
-            for v in 0..VAL_BINS {
-                let (vp, vn) = clamp_step(v, VAL_BINS);
-                b[index(h, s, v)] =
-                    0.5 * a[index(h, s, v)] + 0.25 * (a[index(h, s, vp)] + a[index(h, s, vn)]);
+    for _ in 0..sat {
+        for h in 0..HUE_BINS {
+            for s in 0..SAT_BINS {
+                for v in 0..VAL_BINS {
+                    let (sp, sn) = clamp_step(s, SAT_BINS);
+                    b[index(h, s, v)] =
+                        0.5 * a[index(h, s, v)] + 0.25 * (a[index(h, sp, v)] + a[index(h, sn, v)]);
+                }
             }
         }
+        std::mem::swap(&mut a, &mut b);
     }
-    for g in 0..GREY_BINS {
-        let (gp, gn) = clamp_step(g, GREY_BINS);
-        b[chromatic + g] =
-            0.5 * counts[chromatic + g] + 0.25 * (counts[chromatic + gp] + counts[chromatic + gn]);
+    for _ in 0..val {
+        for h in 0..HUE_BINS {
+            for s in 0..SAT_BINS {
+                for v in 0..VAL_BINS {
+                    let (vp, vn) = clamp_step(v, VAL_BINS);
+                    b[index(h, s, v)] =
+                        0.5 * a[index(h, s, v)] + 0.25 * (a[index(h, s, vp)] + a[index(h, s, vn)]);
+                }
+            }
+        }
+        for g in 0..GREY_BINS {
+            let (gp, gn) = clamp_step(g, GREY_BINS);
+            b[chromatic + g] =
+                0.5 * a[chromatic + g] + 0.25 * (a[chromatic + gp] + a[chromatic + gn]);
+        }
+        std::mem::swap(&mut a, &mut b);
     }
-    b
+    a
 }
 
 impl TableCounts {
     /// Adds one frame: its features, its mask at the features' size, and the previous two frames
-    /// (value channel and mask of t−1, mask of t−2) when they exist.
+    /// (value channel and mask of t−1, mask of t−2) when they exist. Pixels set in `unlabelled` (the
+    /// person's parts outside the suit, which the cut does not look for) stay out of the colour
+    /// table.
     pub fn add_frame(
         &mut self,
         features: &FrameFeatures,
         mask: &[bool],
+        unlabelled: Option<&[bool]>,
         previous: Option<(&FrameFeatures, &[bool])>,
         before_previous: Option<&[bool]>,
     ) {
@@ -213,7 +242,9 @@ impl TableCounts {
         for i in 0..w * h {
             let l = mask[i] as usize;
             self.labels[l] += 1.0;
-            self.colour[l][colour_index(features.colour[i], features.pattern[i])] += 1.0;
+            if !unlabelled.is_some_and(|u| u[i]) {
+                self.colour[l][colour_index(features.colour[i], features.pattern[i])] += 1.0;
+            }
             self.gradient[l][features.gradient[i] as usize] += 1.0;
         }
         // Neighbour pairs over the 3×3 neighbourhood (each unordered pair once, both orders counted).
@@ -248,6 +279,26 @@ impl TableCounts {
         }
     }
 
+    /// Adds the person's parts outside the suit of one frame: `person` is the whole person mask at the
+    /// features' size, `suit` its suit part, `band` the non-suit pixels within the attachment band of
+    /// the suit (see `cleanup::attach_parts`).
+    pub fn add_parts(
+        &mut self,
+        features: &FrameFeatures,
+        person: &[bool],
+        suit: &[bool],
+        band: &[bool],
+    ) {
+        for i in 0..features.colour.len() {
+            if person[i] && !suit[i] {
+                self.part[features.colour[i].bin as usize] += 1.0;
+            }
+            if band[i] {
+                self.band[person[i] as usize] += 1.0;
+            }
+        }
+    }
+
     /// The tables, with the given downscale factor and weights.
     pub fn finish(&self, downscale: u32, weights: Weights) -> SegmenterTables {
         let total = self.labels[0] + self.labels[1];
@@ -275,6 +326,14 @@ impl TableCounts {
             gradient: [0, 1].map(|l| nll_mixed(&self.gradient[l], 0.5, 0.3)),
             motion: std::array::from_fn(|k| nll(&self.motion[k], 0.5)),
             temporal,
+            part: {
+                let [h, s, v] = PART_SMOOTHING;
+                nll_mixed(&smooth_colour_axes(&self.part, h, s, v), 0.5, PART_UNIFORM)
+            },
+            part_prior: {
+                let n = self.band[0] + self.band[1] + 2.0;
+                [0, 1].map(|l| -((self.band[l] + 1.0) / n).ln() as f32)
+            },
             weights,
         }
     }
@@ -316,6 +375,8 @@ impl SegmenterTables {
         );
         m.push("temporal", &[8], self.temporal.to_vec());
         m.push("pair_prior", &[2], self.pair_prior.to_vec());
+        m.push("part", &[COLOUR_BINS], self.part.clone());
+        m.push("part_prior", &[2], self.part_prior.to_vec());
         m.push("weights", &[WEIGHTS], self.weights.to_array().to_vec());
         m
     }
@@ -359,6 +420,9 @@ impl SegmenterTables {
         weights.copy_from_slice(m.array(&path, "weights", &[WEIGHTS])?);
         let mut pair_prior = [0.0; 2];
         pair_prior.copy_from_slice(m.array(&path, "pair_prior", &[2])?);
+        let mut part_prior = [0.0; 2];
+        part_prior.copy_from_slice(m.array(&path, "part_prior", &[2])?);
+        let part = m.array(&path, "part", &[COLOUR_BINS])?.to_vec();
         Ok(SegmenterTables {
             downscale: downscale as u32,
             colour: two(split("colour", 2, COLOUR_TABLE)?),
@@ -368,6 +432,8 @@ impl SegmenterTables {
             gradient: two(split("gradient", 2, GRADIENT_BINS * GRADIENT_BINS)?),
             motion: four(split("motion", 4, GRADIENT_BINS * TEMPORAL_BINS)?),
             temporal,
+            part,
+            part_prior,
             weights: Weights::from_array(weights),
         })
     }
@@ -400,7 +466,7 @@ mod tests {
     fn counts_of_a_4x4_fixture() {
         let (f, mask) = fixture();
         let mut counts = TableCounts::default();
-        counts.add_frame(&f, &mask, None, None);
+        counts.add_frame(&f, &mask, None, None, None);
         assert_eq!(counts.labels, [12.0, 4.0]);
         // 4-connected and diagonal pairs: 12 + 12 + 9 + 9 = 42 unordered, 84 ordered.
         let total: f64 = counts.neighbourhood.iter().flat_map(|v| v.iter()).sum();
@@ -418,7 +484,7 @@ mod tests {
     fn tables_survive_a_save_load_round_trip() {
         let (f, mask) = fixture();
         let mut counts = TableCounts::default();
-        counts.add_frame(&f, &mask, Some((&f, &mask)), Some(&mask));
+        counts.add_frame(&f, &mask, None, Some((&f, &mask)), Some(&mask));
         let tables = counts.finish(
             2,
             Weights {

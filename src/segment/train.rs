@@ -12,7 +12,8 @@
 
 use image::RgbImage;
 
-use super::features::{downscale, ColourLut, FrameFeatures, MarkerGate};
+use super::cleanup::{part_band, PART_REACH};
+use super::features::{downscale, suit_support, ColourLut, FrameFeatures, MarkerGate};
 use super::segmenter::{Segmenter, SegmenterOptions};
 use super::tables::{SegmenterTables, TableCounts, Weights, WEIGHTS};
 use crate::mask::Mask;
@@ -80,22 +81,43 @@ pub fn downscale_mask(mask: &Mask, factor: u32) -> (Vec<bool>, usize, usize) {
     (out, w, h)
 }
 
+/// The suit part of a person mask at the features' size: person pixels within
+/// [`SUIT_RADIUS`](super::features::SUIT_RADIUS) of a person pixel of the cloth's or a marker's
+/// colour in the suit's pattern (see [`suit_support`]).
+pub fn suit_pixels(
+    features: &FrameFeatures,
+    person: &[bool],
+    gate: &MarkerGate,
+    distance: &mut Vec<u16>,
+) -> Vec<bool> {
+    let mut support = Vec::new();
+    suit_support(features, gate, Some(person), distance, &mut support);
+    person.iter().zip(&support).map(|(&p, &s)| p && s).collect()
+}
+
+/// Counts the tables: the cut's tables on the suit part of the masks (the cut finds the suit), the
+/// part table and band prior on the rest of the person.
 fn count(frames: &[TrainingFrame], factor: u32, lut: &ColourLut, gate: &MarkerGate) -> TableCounts {
     let mut counts = TableCounts::default();
+    let (mut distance, mut band) = (Vec::new(), Vec::new());
     let mut history: Vec<(FrameFeatures, Vec<bool>)> = Vec::new();
     let mut small = Vec::new();
     for frame in frames {
         let (w, h) = downscale(&frame.image, factor, &mut small);
         let mut features = FrameFeatures::default();
         features.compute(&small, w, h, lut, gate);
-        let (mask, _, _) = downscale_mask(&frame.mask, factor);
+        let (person, _, _) = downscale_mask(&frame.mask, factor);
+        let mask = suit_pixels(&features, &person, gate, &mut distance);
+        part_band(&mask, w, h, PART_REACH, &mut distance, &mut band);
+        counts.add_parts(&features, &person, &mask, &band);
+        let parts: Vec<bool> = person.iter().zip(&mask).map(|(&p, &s)| p && !s).collect();
         let previous = history.last().map(|(f, m)| (f, m.as_slice()));
         let before = if history.len() >= 2 {
             Some(history[history.len() - 2].1.as_slice())
         } else {
             None
         };
-        counts.add_frame(&features, &mask, previous, before);
+        counts.add_frame(&features, &mask, Some(&parts), previous, before);
         history.push((features, mask));
         if history.len() > 2 {
             history.remove(0);
@@ -248,7 +270,7 @@ mod tests {
         assert_eq!(downscale_mask(&m, 2), (vec![true, false], 2, 1));
     }
 
-    /// Frames of a green square with red marker dots moving over a textured, partly green background.
+    /// Frames of a green square with red and cyan marker dots moving over a textured, partly green background.
     fn synthetic_frames(n: usize) -> Vec<TrainingFrame> {
         (0..n)
             .map(|t| {
@@ -266,7 +288,12 @@ mod tests {
                         let px = if inside {
                             mask[(y * w + x) as usize] = true;
                             if x % 7 < 3 && y % 7 < 3 {
-                                [200, 30, 30]
+                                // Red and cyan dots: the suit's mix of marker hues.
+                                if (x / 7 + y / 7) % 2 == 0 {
+                                    [200, 30, 30]
+                                } else {
+                                    [38, 191, 191]
+                                }
                             } else {
                                 [120, 180, 60]
                             }
