@@ -38,6 +38,8 @@ pub struct MarkerDetector {
     /// Which marker colour (index) each quantised hue (256 steps) is nearest, when within tolerance.
     hue_colour: [Option<u8>; 256],
     marker_size_cm: f32,
+    /// Per marker colour: the saturation (0–255) a component's most saturated pixel must reach.
+    min_peak_sat: Vec<u8>,
     labels: Vec<u8>,
     stack: Vec<usize>,
 }
@@ -48,6 +50,23 @@ const CLOTH: u8 = u8::MAX - 2;
 const OUTSIDE: u8 = u8::MAX - 3;
 /// Share of a marker's in-mask border that must be cloth.
 const MIN_CLOTH_BORDER: f32 = 0.25;
+/// Share of its colour's printed saturation that a marker's most saturated pixel must reach.
+const PEAK_SATURATION_SHARE: f32 = 0.5;
+/// Hue of skin (degrees): skin tones lie at about 15–30°, inside the red marker's hue gate.
+const SKIN_HUE_DEG: f32 = 20.0;
+/// Skin is at most this saturated (the six subjects' albedos: 0.27–0.50; a red marker's core 0.85).
+const SKIN_MAX_SATURATION: f32 = 0.5;
+
+/// The saturation (0–255) a component's most saturated pixel must reach to be a marker of colour
+/// `hsv`: half the printed saturation, so a marker blurred into the cloth still passes, and for a
+/// colour whose hue gate takes in skin, more than skin reaches (hands next to red markers).
+fn min_peak_saturation(hsv: crate::colour::Hsv, hue_tolerance_deg: f32) -> u8 {
+    let mut min = PEAK_SATURATION_SHARE * hsv.saturation;
+    if crate::colour::hue_distance(hsv.hue, SKIN_HUE_DEG) <= hue_tolerance_deg {
+        min = min.max(SKIN_MAX_SATURATION);
+    }
+    (min * 255.0).round() as u8
+}
 
 impl MarkerDetector {
     pub fn new(suit: &SuitDefinition) -> MarkerDetector {
@@ -67,6 +86,11 @@ impl MarkerDetector {
             gate: MarkerGate::new(suit),
             hue_colour,
             marker_size_cm: suit.marker_size_cm,
+            min_peak_sat: suit
+                .markers
+                .iter()
+                .map(|m| min_peak_saturation(m.hsv, gates.hue_tolerance_deg))
+                .collect(),
             labels: Vec::new(),
             stack: Vec::new(),
         }
@@ -132,37 +156,37 @@ impl MarkerDetector {
             }
             let (mut area, mut sum) = (0u32, Vec2::ZERO);
             let (mut border, mut cloth_border) = (0u32, 0u32);
+            let mut peak_sat = 0u8;
             self.labels[start] = SEEN;
             self.stack.push(start);
             while let Some(i) = self.stack.pop() {
                 let (x, y) = (i % bw, i / bw);
                 area += 1;
                 sum += Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                let mut visit = |j: usize, labels: &mut Vec<u8>, stack: &mut Vec<usize>| {
-                    let label = labels[j];
+                let p = ((y + y0 as usize) * width + x + x0 as usize) * 3;
+                peak_sat = peak_sat.max(self.lut.get([raw[p], raw[p + 1], raw[p + 2]]).sat);
+                for (dx, dy) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
+                    let Some(j) = step(i, bw, bh, dx, dy) else {
+                        continue;
+                    };
+                    let label = self.labels[j];
                     if label == colour {
-                        labels[j] = SEEN;
-                        stack.push(j);
+                        self.labels[j] = SEEN;
+                        self.stack.push(j);
                     } else if label != SEEN && label != OUTSIDE {
                         border += 1;
-                        cloth_border += (label == CLOTH) as u32;
+                        let beyond = if label == NONE {
+                            step(j, bw, bh, dx, dy).map(|k| self.labels[k])
+                        } else {
+                            None
+                        };
+                        cloth_border += (label == CLOTH || beyond == Some(CLOTH)) as u32;
                     }
-                };
-                if x > 0 {
-                    visit(i - 1, &mut self.labels, &mut self.stack);
-                }
-                if x + 1 < bw {
-                    visit(i + 1, &mut self.labels, &mut self.stack);
-                }
-                if y > 0 {
-                    visit(i - bw, &mut self.labels, &mut self.stack);
-                }
-                if y + 1 < bh {
-                    visit(i + bw, &mut self.labels, &mut self.stack);
                 }
             }
             let on_cloth = border == 0 || cloth_border as f32 >= MIN_CLOTH_BORDER * border as f32;
-            if on_cloth && (min_area..=max_area).contains(&area) {
+            let saturated = peak_sat >= self.min_peak_sat[colour as usize];
+            if on_cloth && saturated && (min_area..=max_area).contains(&area) {
                 markers.push(DetectedMarker {
                     centre: sum / area as f32 + Vec2::new(x0 as f32, y0 as f32),
                     colour: colour as usize,
@@ -172,6 +196,14 @@ impl MarkerDetector {
         }
         markers
     }
+}
+
+/// The index one pixel from `i` in direction (`dx`, `dy`) in a `bw` × `bh` grid, if inside it.
+#[inline]
+fn step(i: usize, bw: usize, bh: usize, dx: isize, dy: isize) -> Option<usize> {
+    let (x, y) = ((i % bw) as isize + dx, (i / bw) as isize + dy);
+    (x >= 0 && y >= 0 && (x as usize) < bw && (y as usize) < bh)
+        .then(|| y as usize * bw + x as usize)
 }
 
 /// A marker the generator says is visible, for scoring detections.
@@ -357,6 +389,47 @@ mod tests {
         );
         assert_eq!(score.recall(), 0.5);
         assert!((score.precision() - 2.0 / 3.0).abs() < 1e-12);
+    }
+
+    /// Paints the `size` × `size` square at (`x0`, `y0`).
+    fn paint(frame: &mut RgbImage, x0: u32, y0: u32, size: u32, rgb: [u8; 3]) {
+        for y in y0..y0 + size {
+            for x in x0..x0 + size {
+                frame.put_pixel(x, y, image::Rgb(rgb));
+            }
+        }
+    }
+
+    #[test]
+    fn a_marker_with_a_grey_rim_is_still_on_the_cloth() {
+        // Purple and the cloth's green are complementary: their blur is a grey ring around the marker,
+        // so the marker's direct neighbours are not cloth; the cloth one pixel further out counts.
+        let (mut frame, mask) = fixture();
+        paint(&mut frame, 19, 59, 6, [100, 100, 100]);
+        paint(&mut frame, 20, 60, 4, [100, 55, 158]);
+        let mut detector = MarkerDetector::new(&suit());
+        let found = detector.detect(&frame, &mask);
+        assert_eq!(found.len(), 4, "{found:?}");
+        assert!(found
+            .iter()
+            .any(|m| m.colour == 2 && m.centre.distance(Vec2::new(22.0, 62.0)) < 1e-4));
+        // A blob inside a wide grey field is not on the cloth.
+        paint(&mut frame, 10, 130, 20, [100, 100, 100]);
+        paint(&mut frame, 18, 138, 4, [100, 55, 158]);
+        assert_eq!(detector.detect(&frame, &mask).len(), 4);
+    }
+
+    #[test]
+    fn skin_and_washed_out_blobs_are_not_markers() {
+        let (mut frame, mask) = fixture();
+        // Skin (hue 20°, saturation 0.45) is inside the red hue gate but below the skin bound.
+        paint(&mut frame, 20, 60, 4, [200, 140, 110]);
+        // A cyan blob at a quarter of the printed saturation (0.2 < half of 0.80).
+        paint(&mut frame, 30, 80, 4, [150, 191, 191]);
+        let mut detector = MarkerDetector::new(&suit());
+        assert_eq!(detector.detect(&frame, &mask).len(), 3);
+        assert_eq!(min_peak_saturation(suit().markers[0].hsv, 35.0), 128);
+        assert_eq!(min_peak_saturation(suit().markers[1].hsv, 35.0), 102);
     }
 
     #[test]
