@@ -33,6 +33,9 @@ pub struct DetectedMarker {
 #[derive(Clone, Debug)]
 pub struct MarkerDetector {
     lut: ColourLut,
+    /// The label of every 6-bit-per-channel RGB (indexed like [`ColourLut`]): a marker colour index,
+    /// `CLOTH` or `NONE`; one lookup per pixel in the labelling pass.
+    pixel_label: Vec<u8>,
     /// The suit's saturation/value gates and marker/cloth hue tests.
     gate: MarkerGate,
     /// Which marker colour (index) each quantised hue (256 steps) is nearest, when within tolerance.
@@ -81,9 +84,23 @@ impl MarkerDetector {
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .map(|(i, _)| i as u8)
         });
+        let lut = ColourLut::new();
+        let gate = MarkerGate::new(suit);
+        let pixel_label = (0..1usize << 18)
+            .map(|i| {
+                let rgb = [(i >> 12) as u8, (i >> 6) as u8 & 63, i as u8 & 63].map(|c| c << 2);
+                let c = lut.get(rgb);
+                match (gate.is_marker(c), gate.is_cloth(c)) {
+                    (true, _) => hue_colour[c.hue as usize].unwrap_or(NONE),
+                    (false, true) => CLOTH,
+                    (false, false) => NONE,
+                }
+            })
+            .collect();
         MarkerDetector {
-            lut: ColourLut::new(),
-            gate: MarkerGate::new(suit),
+            lut,
+            pixel_label,
+            gate,
             hue_colour,
             marker_size_cm: suit.marker_size_cm,
             min_peak_sat: suit
@@ -136,12 +153,8 @@ impl MarkerDetector {
                 let i = row + x;
                 self.labels[y * bw + x] = if inside[i] {
                     let p = i * 3;
-                    let c = self.lut.get([raw[p], raw[p + 1], raw[p + 2]]);
-                    match self.classify(c) {
-                        Some(colour) => colour,
-                        None if self.gate.is_cloth(c) => CLOTH,
-                        None => NONE,
-                    }
+                    let (r, g, b) = (raw[p] as usize, raw[p + 1] as usize, raw[p + 2] as usize);
+                    self.pixel_label[((r >> 2) << 12) | ((g >> 2) << 6) | (b >> 2)]
                 } else {
                     OUTSIDE
                 };
@@ -166,7 +179,7 @@ impl MarkerDetector {
                 let p = ((y + y0 as usize) * width + x + x0 as usize) * 3;
                 peak_sat = peak_sat.max(self.lut.get([raw[p], raw[p + 1], raw[p + 2]]).sat);
                 for (dx, dy) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
-                    let Some(j) = step(i, bw, bh, dx, dy) else {
+                    let Some(j) = step(x, y, bw, bh, dx, dy) else {
                         continue;
                     };
                     let label = self.labels[j];
@@ -176,7 +189,7 @@ impl MarkerDetector {
                     } else if label != SEEN && label != OUTSIDE {
                         border += 1;
                         let beyond = if label == NONE {
-                            step(j, bw, bh, dx, dy).map(|k| self.labels[k])
+                            step(x, y, bw, bh, 2 * dx, 2 * dy).map(|k| self.labels[k])
                         } else {
                             None
                         };
@@ -198,12 +211,11 @@ impl MarkerDetector {
     }
 }
 
-/// The index one pixel from `i` in direction (`dx`, `dy`) in a `bw` × `bh` grid, if inside it.
+/// The index of pixel (`x` + `dx`, `y` + `dy`) in a `bw` × `bh` grid, if inside it.
 #[inline]
-fn step(i: usize, bw: usize, bh: usize, dx: isize, dy: isize) -> Option<usize> {
-    let (x, y) = ((i % bw) as isize + dx, (i / bw) as isize + dy);
-    (x >= 0 && y >= 0 && (x as usize) < bw && (y as usize) < bh)
-        .then(|| y as usize * bw + x as usize)
+fn step(x: usize, y: usize, bw: usize, bh: usize, dx: isize, dy: isize) -> Option<usize> {
+    let (x, y) = (x.checked_add_signed(dx)?, y.checked_add_signed(dy)?);
+    (x < bw && y < bh).then(|| y * bw + x)
 }
 
 /// A marker the generator says is visible, for scoring detections.
