@@ -27,8 +27,8 @@
 //! masks the precision rises 0.964 → 0.970, 0.927 → 0.955, 0.964 → 0.963, 0.978 → 0.981, 0.997 →
 //! 0.999. The constants were chosen on these same sequences. What is still missed is mostly markers
 //! seen nearly edge-on: markers with no rendered pixel whose four neighbours are the same marker
-//! (at most 2 px thick) are 16 % of the counted truth of kick 10 and dance 05 and are found 0.74 and
-//! 0.67 of the time; the rest 0.977 and 0.987. Tried and dropped: splitting large components into
+//! (at most 2 px thick) are 16 % and 17 % of the counted truth of kick 10 and dance 05 and are found
+//! 0.73 and 0.67 of the time; the rest 0.976 and 0.987. Tried and dropped: splitting large components into
 //! their saturated cores (recall +0.1–0.3 points, precision −1 point), taking the cloth's colour out
 //! of grey and brownish pixels before the hue test (precision with segmenter masks 0.82–0.97),
 //! one-pixel markers and a 15 % border share (precision down, recall unchanged).
