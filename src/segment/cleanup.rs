@@ -42,24 +42,12 @@ pub fn components(
             count += 1;
             let (x, y) = (i % width, i / width);
             border |= x == 0 || y == 0 || x + 1 == width || y + 1 == height;
-            let mut visit = |j: usize| {
+            for_each_neighbour(i, width, height, |j| {
                 if labels[j] == value && ids[j] == u32::MAX {
                     ids[j] = id;
                     stack.push(j);
                 }
-            };
-            if x > 0 {
-                visit(i - 1);
-            }
-            if x + 1 < width {
-                visit(i + 1);
-            }
-            if y > 0 {
-                visit(i - width);
-            }
-            if y + 1 < height {
-                visit(i + width);
-            }
+            });
         }
         stats.push((count, border));
     }
@@ -213,29 +201,33 @@ pub fn attach_parts(
     stack.extend((0..person.len()).filter(|&i| person[i]));
     let mut added = 0;
     while let Some(i) = stack.pop() {
-        let (x, y) = (i % width, i / width);
-        let mut visit = |j: usize| {
+        for_each_neighbour(i, width, height, |j| {
             if band[j] && !person[j] && part_like(j) {
                 person[j] = true;
                 part[j] = true;
                 added += 1;
                 stack.push(j);
             }
-        };
-        if x > 0 {
-            visit(i - 1);
-        }
-        if x + 1 < width {
-            visit(i + 1);
-        }
-        if y > 0 {
-            visit(i - width);
-        }
-        if y + 1 < height {
-            visit(i + width);
-        }
+        });
     }
     added
+}
+
+/// Calls `visit` with each 4-neighbour of pixel `i` inside a `width`×`height` grid.
+fn for_each_neighbour(i: usize, width: usize, height: usize, mut visit: impl FnMut(usize)) {
+    let (x, y) = (i % width, i / width);
+    if x > 0 {
+        visit(i - 1);
+    }
+    if x + 1 < width {
+        visit(i + 1);
+    }
+    if y > 0 {
+        visit(i - width);
+    }
+    if y + 1 < height {
+        visit(i + width);
+    }
 }
 
 #[cfg(test)]

@@ -177,44 +177,38 @@ fn smooth_colour(counts: &[f64]) -> Vec<f64> {
 /// achromatic bins take the value passes).
 fn smooth_colour_axes(counts: &[f64], hue: usize, sat: usize, val: usize) -> Vec<f64> {
     let chromatic = HUE_BINS * SAT_BINS * VAL_BINS;
-    let index = |h: usize, s: usize, v: usize| (h * SAT_BINS + s) * VAL_BINS + v;
+    let index = |[h, s, v]: [usize; 3]| (h * SAT_BINS + s) * VAL_BINS + v;
     let mut a = counts.to_vec();
     let mut b = counts.to_vec();
     let clamp_step = |k: usize, n: usize| (k.saturating_sub(1), (k + 1).min(n - 1));
-    for _ in 0..hue {
+    // One ¼ ½ ¼ pass along `axis` (0 hue, circular; 1 saturation; 2 value) over the chromatic bins.
+    let pass = |a: &[f64], b: &mut [f64], axis: usize| {
         for h in 0..HUE_BINS {
             for s in 0..SAT_BINS {
                 for v in 0..VAL_BINS {
-                    let (hp, hn) = ((h + HUE_BINS - 1) % HUE_BINS, (h + 1) % HUE_BINS);
-                    b[index(h, s, v)] =
-                        0.5 * a[index(h, s, v)] + 0.25 * (a[index(hp, s, v)] + a[index(hn, s, v)]);
+                    let bin = [h, s, v];
+                    let (mut before, mut after) = (bin, bin);
+                    (before[axis], after[axis]) = match axis {
+                        0 => ((h + HUE_BINS - 1) % HUE_BINS, (h + 1) % HUE_BINS),
+                        1 => clamp_step(s, SAT_BINS),
+                        _ => clamp_step(v, VAL_BINS),
+                    };
+                    b[index(bin)] =
+                        0.5 * a[index(bin)] + 0.25 * (a[index(before)] + a[index(after)]);
                 }
             }
         }
+    };
+    for _ in 0..hue {
+        pass(&a, &mut b, 0);
         std::mem::swap(&mut a, &mut b);
     }
     for _ in 0..sat {
-        for h in 0..HUE_BINS {
-            for s in 0..SAT_BINS {
-                for v in 0..VAL_BINS {
-                    let (sp, sn) = clamp_step(s, SAT_BINS);
-                    b[index(h, s, v)] =
-                        0.5 * a[index(h, s, v)] + 0.25 * (a[index(h, sp, v)] + a[index(h, sn, v)]);
-                }
-            }
-        }
+        pass(&a, &mut b, 1);
         std::mem::swap(&mut a, &mut b);
     }
     for _ in 0..val {
-        for h in 0..HUE_BINS {
-            for s in 0..SAT_BINS {
-                for v in 0..VAL_BINS {
-                    let (vp, vn) = clamp_step(v, VAL_BINS);
-                    b[index(h, s, v)] =
-                        0.5 * a[index(h, s, v)] + 0.25 * (a[index(h, s, vp)] + a[index(h, s, vn)]);
-                }
-            }
-        }
+        pass(&a, &mut b, 2);
         for g in 0..GREY_BINS {
             let (gp, gn) = clamp_step(g, GREY_BINS);
             b[chromatic + g] =
