@@ -63,8 +63,6 @@ pub struct MarkerDetector {
     pixel_label: Vec<u8>,
     /// The suit's saturation/value gates and marker/cloth hue tests.
     gate: MarkerGate,
-    /// Which marker colour (index) each quantised hue (256 steps) is nearest, when within tolerance.
-    hue_colour: [Option<u8>; 256],
     marker_size_cm: f32,
     /// Per marker colour: the saturation (0–255) a component's most saturated pixel must reach.
     min_peak_sat: Vec<u8>,
@@ -99,26 +97,16 @@ fn min_peak_saturation(hsv: crate::colour::Hsv, hue_tolerance_deg: f32) -> u8 {
 impl MarkerDetector {
     pub fn new(suit: &SuitDefinition) -> MarkerDetector {
         let gates = suit.detection;
-        let hue_colour = std::array::from_fn(|q| {
-            let hue = (q as f32 + 0.5) * 360.0 / 256.0;
-            suit.markers
-                .iter()
-                .enumerate()
-                .map(|(i, m)| (i, crate::colour::hue_distance(hue, m.hsv.hue)))
-                .filter(|&(_, d)| d <= gates.hue_tolerance_deg)
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .map(|(i, _)| i as u8)
-        });
         let lut = ColourLut::new();
         let gate = MarkerGate::new(suit);
         let pixel_label = (0..1usize << 18)
             .map(|i| {
                 let rgb = [(i >> 12) as u8, (i >> 6) as u8 & 63, i as u8 & 63].map(|c| c << 2);
                 let c = lut.get(rgb);
-                match (gate.is_marker(c), gate.is_cloth(c)) {
-                    (true, _) => hue_colour[c.hue as usize].unwrap_or(NONE),
-                    (false, true) => CLOTH,
-                    (false, false) => NONE,
+                match gate.marker_index(c) {
+                    Some(k) => k as u8,
+                    None if gate.is_cloth(c) => CLOTH,
+                    None => NONE,
                 }
             })
             .collect();
@@ -126,7 +114,6 @@ impl MarkerDetector {
             lut,
             pixel_label,
             gate,
-            hue_colour,
             marker_size_cm: suit.marker_size_cm,
             min_peak_sat: suit
                 .markers
@@ -141,11 +128,7 @@ impl MarkerDetector {
     /// The marker colour of a pixel, if it has one.
     #[inline]
     pub fn classify(&self, c: PixelColour) -> Option<u8> {
-        if self.gate.is_marker(c) {
-            self.hue_colour[c.hue as usize]
-        } else {
-            None
-        }
+        self.gate.marker_index(c).map(|k| k as u8)
     }
 
     /// Area bounds (pixels) of a marker for a silhouette `height` pixels tall.

@@ -94,8 +94,8 @@ pub fn colour_index(colour: PixelColour, pattern: u8) -> usize {
 /// hue, saturation and value above its gates).
 #[derive(Clone, Debug)]
 pub struct MarkerGate {
-    hue: [bool; 256],
-    /// Index + 1 of the marker colour a hue belongs to (0: none).
+    /// Index + 1 of the marker colour a hue belongs to: the nearest marker hue within the suit's
+    /// tolerance (0: none).
     marker_of: [u8; 256],
     markers: usize,
     /// Hues of the suit's cloth (its background colour).
@@ -108,12 +108,6 @@ impl MarkerGate {
     pub fn new(suit: &crate::suit::SuitDefinition) -> MarkerGate {
         let gates = suit.detection;
         MarkerGate {
-            hue: std::array::from_fn(|q| {
-                let hue = (q as f32 + 0.5) * 360.0 / 256.0;
-                suit.markers
-                    .iter()
-                    .any(|m| crate::colour::hue_distance(hue, m.hsv.hue) <= gates.hue_tolerance_deg)
-            }),
             marker_of: std::array::from_fn(|q| {
                 let hue = (q as f32 + 0.5) * 360.0 / 256.0;
                 suit.markers
@@ -143,7 +137,7 @@ impl MarkerGate {
         c.chromatic
             && c.sat >= self.min_saturation
             && c.val >= self.min_value
-            && self.hue[c.hue as usize]
+            && self.marker_of[c.hue as usize] != 0
     }
 
     /// Which of the suit's marker colours the pixel has, if any.
