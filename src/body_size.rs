@@ -127,8 +127,8 @@ impl BodyMasker {
         BodyMasker::of_parts(body, |_| true)
     }
 
-    /// Only the suit-covered parts: for the segmenter's masks, which find the suit and miss the
-    /// skin and the shoes.
+    /// Only the suit-covered parts: for masks of the suit alone (the segmenter's before its model
+    /// version 6, which missed the skin and the shoes).
     pub fn suit_only(body: &Body) -> BodyMasker {
         BodyMasker::of_parts(body, |p| p.material == Material::Suit)
     }
@@ -184,13 +184,13 @@ pub struct BodySizeEstimator {
 }
 
 impl BodySizeEstimator {
-    /// For silhouettes of the whole person (ground-truth masks).
+    /// For silhouettes of the whole person (ground-truth masks, and the segmenter's).
     pub fn new() -> BodySizeEstimator {
         BodySizeEstimator::default()
     }
 
-    /// For the segmenter's silhouettes, which cover the suit only: the template body is compared
-    /// without its head, hands and shoes.
+    /// For silhouettes of the suit only (the segmenter's before its model version 6): the template
+    /// body is compared without its head, hands and shoes.
     pub fn for_suit_silhouettes() -> BodySizeEstimator {
         BodySizeEstimator {
             suit_only: true,

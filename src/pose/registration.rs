@@ -3,8 +3,8 @@
 //!
 //! The regressed root offset and the head/hand/shoe correction ([`super::correction`]) leave the body
 //! several centimetres off in the image, which the pose angles do not care about but a garment drawn
-//! over the video does. Here the suit-covered parts of the template body (the segmenter finds the
-//! suit, not the skin or shoes), posed by the frame, are rasterized at a quarter of the resolution
+//! over the video does. Here the template body (head, hands and shoes included, as in the
+//! segmenter's masks), posed by the frame, is rasterized at a quarter of the resolution
 //! ([`BodyMasker`]), and the integer shift within ±15 % of the image width that puts most model
 //! pixels on the (block-reduced) silhouette is found coarse to fine; the root moves parallel to the
 //! image plane by that shift × depth / focal length. Overlap, unlike aligning centroids, is not
@@ -35,11 +35,11 @@ pub struct Registration {
 }
 
 impl Registration {
-    /// A registration against the segmenter's masks: only the suit-covered parts of `body` count
-    /// (the segmenter misses the head, hands and shoes, which would pull the body off centre).
+    /// A registration against the segmenter's masks, which cover the whole person (head, hands and
+    /// shoes are attached to the suit since the segmenter's model version 6).
     pub fn new(body: &Body) -> Registration {
         Registration {
-            masker: BodyMasker::suit_only(body),
+            masker: BodyMasker::new(body),
             depth: DepthBuffer::new(1, 1),
             world: Vec::new(),
             downscale: 4,
@@ -258,7 +258,7 @@ mod tests {
         let mut world = Vec::new();
         skeleton.forward_kinematics(&truth, &mut world);
         let mut depth = DepthBuffer::new(320, 240);
-        let silhouette = BodyMasker::suit_only(&body).mask(&world, &camera, &mut depth);
+        let silhouette = BodyMasker::new(&body).mask(&world, &camera, &mut depth);
         let mut frame = truth.clone();
         frame[root_position[0]] += 12.0; // camera x is world x here
         let mut registration = Registration::new(&body);

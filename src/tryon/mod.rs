@@ -97,8 +97,8 @@ pub struct ClothOptions {
     pub known_size: Option<BodySize>,
     /// Garment edge length instead of the mode's (cm).
     pub edge_cm: Option<f32>,
-    /// The silhouettes cover the whole person (ground-truth masks), not only the suit (the
-    /// segmenter's masks).
+    /// The silhouettes cover the whole person (ground-truth masks, and the segmenter's since its
+    /// model version 6 attaches head, hands and shoes), not only the suit (earlier segmenters).
     pub whole_person_silhouettes: bool,
 }
 
@@ -114,7 +114,7 @@ impl ClothOptions {
             },
             known_size: None,
             edge_cm: None,
-            whole_person_silhouettes: false,
+            whole_person_silhouettes: true,
         }
     }
 
