@@ -107,6 +107,26 @@ mod tests {
         assert_eq!(second[(3 * FC_ANGULAR + 6) * FC_COLOURS + 2], 0.5);
     }
 
+    /// Whether some neighbour of marker `i` lies within float rounding of a bin edge (radial or angular)
+    /// or of the radius: moving the picture may then put it on the other side of that edge.
+    fn sees_a_neighbour_on_an_edge(markers: &[DetectedMarker], i: usize, radius: f32) -> bool {
+        const EPS: f32 = 1e-3;
+        markers.iter().enumerate().any(|(j, n)| {
+            let d = n.centre - markers[i].centre;
+            let r = d.length();
+            if j == i || r > radius * (1.0 + EPS) {
+                return false;
+            }
+            let radial = (r / radius).log2();
+            let angular = (-d.y).atan2(d.x).rem_euclid(std::f32::consts::TAU)
+                / std::f32::consts::TAU
+                * FC_ANGULAR as f32;
+            let off_integer = |v: f32| (v - v.round()).abs();
+            (radial > -(FC_RADIAL as f32) && off_integer(radial) < EPS)
+                || off_integer(angular) < EPS
+        })
+    }
+
     #[test]
     fn a_lonely_marker_has_an_empty_histogram() {
         let fc = feature_contexts(&[marker(0.0, 0.0, 0), marker(500.0, 0.0, 1)], 100.0);
@@ -128,9 +148,15 @@ mod tests {
                 .collect();
             let a = feature_contexts(&markers, 200.0);
             let b = feature_contexts(&moved, 200.0 * scale);
-            let differing = a.iter().zip(&b).filter(|(p, q)| (*p - *q).abs() > 1e-4).count();
-            // Points exactly on a bin edge may round differently after scaling; they are rare.
-            prop_assert!(differing <= 2, "{} values differ", differing);
+            for m in 0..markers.len() {
+                // A neighbour exactly on a bin edge may round to the other side after scaling.
+                if sees_a_neighbour_on_an_edge(&markers, m, FC_RADIUS * 200.0) {
+                    continue;
+                }
+                let range = m * FC_LEN..(m + 1) * FC_LEN;
+                let differing = a[range.clone()].iter().zip(&b[range]).filter(|(p, q)| (*p - *q).abs() > 1e-4).count();
+                prop_assert_eq!(differing, 0, "marker {}", m);
+            }
         }
 
         #[test]
@@ -141,8 +167,12 @@ mod tests {
             let rotated: Vec<DetectedMarker> = points.iter().map(|&(x, y, c)| marker(500.0 - x, 400.0 - y, c)).collect();
             let a = feature_contexts(&markers, 200.0);
             let b = feature_contexts(&rotated, 200.0);
-            let mut differing = 0;
             for m in 0..markers.len() {
+                // A neighbour exactly on a bin edge can fall on the other side after rotation.
+                if sees_a_neighbour_on_an_edge(&markers, m, FC_RADIUS * 200.0) {
+                    continue;
+                }
+                let mut differing = 0;
                 for r in 0..FC_RADIAL {
                     for t in 0..FC_ANGULAR {
                         for c in 0..FC_COLOURS {
@@ -153,9 +183,8 @@ mod tests {
                         }
                     }
                 }
+                prop_assert_eq!(differing, 0, "marker {}", m);
             }
-            // Neighbours exactly on an angle-bin edge can fall on the other side after rotation.
-            prop_assert!(differing <= 2, "{} values differ", differing);
         }
     }
 }
