@@ -473,12 +473,13 @@ fn segment(
             v[v.len() / 2]
         };
         println!(
-            "median ms per frame: features {:.2}, graph {:.2}, cut {:.2}, clean-up {:.2}, refine {:.2}, total {:.2}",
+            "median ms per frame: features {:.2}, graph {:.2}, cut {:.2}, clean-up {:.2}, refine {:.2}, history {:.2}, total {:.2}",
             median(&|t| t.features),
             median(&|t| t.graph),
             median(&|t| t.cut),
             median(&|t| t.cleanup),
             median(&|t| t.refine),
+            median(&|t| t.history),
             median(&|t| t.total())
         );
     }

@@ -18,6 +18,10 @@ use crate::skeleton::Skeleton;
 /// Version of the `suit.toml` format this build reads.
 pub const SUIT_FORMAT: u32 = 1;
 
+/// At most this many marker colours: the Feature Context histogram has one colour bin per marker
+/// colour ([`FC_COLOURS`](crate::descriptor::feature_context::FC_COLOURS)).
+pub const MAX_MARKER_COLOURS: usize = crate::descriptor::feature_context::FC_COLOURS;
+
 /// A named colour of the suit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SuitColour {
@@ -239,6 +243,15 @@ impl SuitDefinition {
             return Err(field(
                 "colours.markers".into(),
                 "lists no marker colour".into(),
+            ));
+        }
+        if markers.len() > MAX_MARKER_COLOURS {
+            return Err(field(
+                "colours.markers".into(),
+                format!(
+                    "lists {} marker colours; the Feature Context descriptor has bins for at most {MAX_MARKER_COLOURS}",
+                    markers.len()
+                ),
             ));
         }
 
@@ -468,6 +481,14 @@ mod tests {
                 ".parent",
             ),
             (text.replacen("format = 1", "format = 7", 1), "format"),
+            (
+                text.replacen(
+                    "[[colours.markers]]",
+                    "[[colours.markers]]\nname = \"blue\"\nhue = 225.0\nsaturation = 0.8\nvalue = 0.7\n\n[[colours.markers]]",
+                    1,
+                ),
+                "colours.markers",
+            ),
         ];
         for (bad, field) in cases {
             let err = parse(&bad).expect_err(field).to_string();

@@ -6,7 +6,8 @@
 //! score (the caller scores pixels, e.g. suit cloth next to a marker, so that a large flat green poster
 //! does not beat a smaller person) if it is big enough, and removes the rest; [`fill_holes`] fills background
 //! components that do not touch the image border and are smaller than a limit. Both report what they
-//! changed, which the segmenter passes on in its output.
+//! changed, which the segmenter passes on in its output. [`clean`] runs both on the box around the
+//! foreground only ([`PixelBox`]), with the same result as on the whole grid.
 
 /// What the clean-up changed in one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -120,6 +121,134 @@ pub fn fill_holes(
     }
 }
 
+/// A rectangle of grid pixels, columns `x0..x1` and rows `y0..y1`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelBox {
+    pub x0: usize,
+    pub y0: usize,
+    pub x1: usize,
+    pub y1: usize,
+}
+
+impl PixelBox {
+    /// The box around the set pixels of `region` (row-major, `width` × `height`), grown by `margin`
+    /// on each side and clipped to the grid; `None` when no pixel is set.
+    pub fn around(region: &[bool], width: usize, height: usize, margin: usize) -> Option<PixelBox> {
+        let rows = || region.chunks_exact(width.max(1)).take(height);
+        let first = rows().position(|row| row.contains(&true))?;
+        let last = height - 1 - rows().rev().position(|row| row.contains(&true))?;
+        let (mut x0, mut x1) = (width, 0);
+        for row in rows().skip(first).take(last + 1 - first) {
+            if let (Some(a), Some(b)) = (row.iter().position(|&p| p), row.iter().rposition(|&p| p))
+            {
+                x0 = x0.min(a);
+                x1 = x1.max(b);
+            }
+        }
+        Some(PixelBox {
+            x0: x0.saturating_sub(margin),
+            y0: first.saturating_sub(margin),
+            x1: (x1 + 1 + margin).min(width),
+            y1: (last + 1 + margin).min(height),
+        })
+    }
+
+    pub fn width(&self) -> usize {
+        self.x1 - self.x0
+    }
+
+    pub fn height(&self) -> usize {
+        self.y1 - self.y0
+    }
+
+    pub fn contains(&self, x: usize, y: usize) -> bool {
+        (self.x0..self.x1).contains(&x) && (self.y0..self.y1).contains(&y)
+    }
+
+    /// Index in the `width`-wide grid of index `i` of the box's own (row-major) pixels.
+    #[inline]
+    pub fn grid_index(&self, i: usize, width: usize) -> usize {
+        (self.y0 + i / self.width()) * width + self.x0 + i % self.width()
+    }
+
+    /// The box's pixels of `grid` (`width` wide), row-major, into `out`.
+    pub fn crop<T: Copy>(&self, grid: &[T], width: usize, out: &mut Vec<T>) {
+        out.clear();
+        for y in self.y0..self.y1 {
+            out.extend_from_slice(&grid[y * width + self.x0..y * width + self.x1]);
+        }
+    }
+
+    /// Writes `crop` (the box's pixels, row-major) back into `grid` (`width` wide).
+    pub fn paste<T: Copy>(&self, crop: &[T], width: usize, grid: &mut [T]) {
+        for (y, row) in (self.y0..self.y1).zip(crop.chunks_exact(self.width().max(1))) {
+            grid[y * width + self.x0..y * width + self.x1].copy_from_slice(row);
+        }
+    }
+}
+
+/// [`keep_person_region`] (when `score` is given) then [`fill_holes`], computed on the box around the
+/// foreground grown by one pixel and clipped to the grid: the same result as on the whole grid, in
+/// time that grows with the person rather than the frame. Every foreground component lies inside
+/// the box; the box's edge is background, and a background component that touches it is joined to
+/// the region around the person, which reaches the image border, so it is not a hole.
+#[allow(clippy::too_many_arguments)]
+pub fn clean(
+    labels: &mut [bool],
+    width: usize,
+    height: usize,
+    score: Option<(&dyn Fn(usize) -> f32, usize)>,
+    max_hole: usize,
+    crop: &mut Vec<bool>,
+    ids: &mut Vec<u32>,
+) -> CleanupReport {
+    let Some(b) = PixelBox::around(labels, width, height, 1) else {
+        return CleanupReport::default();
+    };
+    b.crop(labels, width, crop);
+    let (bw, bh) = (b.width(), b.height());
+    let mut report = match score {
+        Some((score, min_area)) => keep_person_region(
+            crop,
+            bw,
+            bh,
+            |i| score(b.grid_index(i, width)),
+            min_area,
+            ids,
+        ),
+        None => CleanupReport::default(),
+    };
+    fill_holes(crop, bw, bh, max_hole, ids, &mut report);
+    b.paste(crop, width, labels);
+    report
+}
+
+/// The 3-4 chamfer distance (3 per pixel step, 4 per diagonal) from the set pixels of `region`, on
+/// the box around them grown by `reach` pixels, into `distance` (box-sized, row-major); returns the
+/// box, `None` when no pixel is set. Exact up to `reach` pixels from the region — a chamfer path that
+/// short stays within the box — and every pixel outside the box is farther than `reach`.
+pub fn distance_near(
+    region: &[bool],
+    width: usize,
+    height: usize,
+    reach: usize,
+    distance: &mut Vec<u16>,
+) -> Option<PixelBox> {
+    let b = PixelBox::around(region, width, height, reach)?;
+    distance.clear();
+    for y in b.y0..b.y1 {
+        distance.extend(region[y * width + b.x0..y * width + b.x1].iter().map(|&s| {
+            if s {
+                0
+            } else {
+                super::features::FAR
+            }
+        }));
+    }
+    super::features::chamfer(distance, b.width(), b.height());
+    Some(b)
+}
+
 /// How far the person's parts outside the suit (head, hands, shoes) reach from it, as a share of the
 /// suit region's height: the head of an upright person is about an eighth of their height.
 pub const PART_REACH: f32 = 0.15;
@@ -150,30 +279,10 @@ pub fn part_band(
     if pixels == 0 || width == 0 {
         return;
     }
-    // The distance transform on the suit's bounding box grown by the reach: a 3-4 chamfer path no
-    // longer than the reach stays within it, so the band is the same as on the whole image.
-    let (mut x0, mut y0, mut x1, mut y1) = (width, height, 0, 0);
-    for (i, _) in suit.iter().enumerate().filter(|(_, &s)| s) {
-        let (x, y) = (i % width, i / width);
-        x0 = x0.min(x);
-        x1 = x1.max(x);
-        y0 = y0.min(y);
-        y1 = y1.max(y);
-    }
-    let (x0, y0) = (x0.saturating_sub(pixels), y0.saturating_sub(pixels));
-    let (x1, y1) = ((x1 + pixels).min(width - 1), (y1 + pixels).min(height - 1));
-    let (bw, bh) = (x1 + 1 - x0, y1 + 1 - y0);
-    distance.clear();
-    for y in y0..=y1 {
-        distance.extend(suit[y * width + x0..=y * width + x1].iter().map(|&s| {
-            if s {
-                0
-            } else {
-                super::features::FAR
-            }
-        }));
-    }
-    super::features::chamfer(distance, bw, bh);
+    let Some(b) = distance_near(suit, width, height, pixels, distance) else {
+        return;
+    };
+    let (x0, y0, bw, bh) = (b.x0, b.y0, b.width(), b.height());
     let reach = pixels as u32 * 3;
     for y in 0..bh {
         for x in 0..bw {
@@ -321,5 +430,56 @@ mod tests {
         let mut report = CleanupReport::default();
         fill_holes(&mut m, w, h, 0, &mut ids, &mut report);
         assert_eq!(report.holes_filled, 0);
+    }
+    #[test]
+    fn a_box_around_the_set_pixels_grown_and_clipped() {
+        let (m, w, h) = grid(&[".....", "..#..", "...#.", "....."]);
+        let b = PixelBox::around(&m, w, h, 0).expect("two set pixels");
+        assert_eq!((b.x0, b.y0, b.x1, b.y1), (2, 1, 4, 3));
+        let b = PixelBox::around(&m, w, h, 2).expect("two set pixels");
+        assert_eq!((b.x0, b.y0, b.x1, b.y1), (0, 0, 5, 4));
+        assert_eq!(PixelBox::around(&vec![false; 20], w, h, 1), None);
+        let b = PixelBox::around(&m, w, h, 0).expect("two set pixels");
+        let mut crop = Vec::new();
+        b.crop(&m, w, &mut crop);
+        assert_eq!(crop, vec![true, false, false, true]);
+        assert_eq!(b.grid_index(3, w), 2 * w + 3);
+        let mut pasted = vec![false; 20];
+        b.paste(&crop, w, &mut pasted);
+        assert_eq!(pasted, m);
+    }
+
+    #[test]
+    fn distances_near_a_region_match_the_whole_grid() {
+        let (m, w, h) = grid(&["........", "........", "...#....", "........", "........"]);
+        let mut near = Vec::new();
+        let b = distance_near(&m, w, h, 1, &mut near).expect("a set pixel");
+        assert_eq!((b.x0, b.y0, b.x1, b.y1), (2, 1, 5, 4));
+        // 3 per step, 4 per diagonal: the 3×3 ring around the pixel.
+        assert_eq!(near, vec![4, 3, 4, 3, 0, 3, 4, 3, 4]);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn cleaning_in_the_box_equals_cleaning_the_whole_grid(
+            cells in proptest::collection::vec(proptest::bool::weighted(0.4), 1..200),
+            width in 1usize..16,
+            min_area in 1usize..6,
+            max_hole in 0usize..8,
+        ) {
+            let height = cells.len() / width;
+            proptest::prop_assume!(height > 0);
+            let labels = &cells[..width * height];
+            let score = |i: usize| (i % 7) as f32;
+            let mut ids = Vec::new();
+            let mut whole = labels.to_vec();
+            let mut expected = keep_person_region(&mut whole, width, height, score, min_area, &mut ids);
+            fill_holes(&mut whole, width, height, max_hole, &mut ids, &mut expected);
+            let mut boxed = labels.to_vec();
+            let report = clean(&mut boxed, width, height, Some((&score, min_area)), max_hole, &mut Vec::new(), &mut ids);
+            proptest::prop_assert_eq!(&boxed, &whole);
+            // The box leaves out background outside it, which is never a hole or removed region.
+            proptest::prop_assert_eq!(report, expected);
+        }
     }
 }

@@ -64,8 +64,9 @@ pub fn is_suit_pattern(class: u8, share: u8) -> bool {
 /// Half-width of the pattern window: a 60th of the cut's height, at least 4 pixels (a 9 × 9 window at
 /// 320 × 240). The person fills a similar share of the picture at any resolution, so the window
 /// spans a similar number of marker pitches.
+/// At most 127, so that a window's counts fit the 16-bit lanes of the pattern's summed-area table.
 pub fn pattern_radius(height: usize) -> usize {
-    ((height as f32 / 60.0).round() as usize).max(4)
+    ((height as f32 / 60.0).round() as usize).clamp(4, 127)
 }
 
 /// Pattern class of a share in [0, 1].
@@ -289,27 +290,14 @@ pub struct FrameFeatures {
     pub gradient_magnitude: Vec<u8>,
     /// Pattern class (see [`PATTERN_CLASSES`]), joint with the colour in the colour table.
     pub pattern: Vec<u8>,
-    /// Per pixel: which half of the pattern it has (see `compute_pattern`).
-    codes: Vec<u8>,
-    cloth_sum: Vec<u32>,
-    /// One summed-area table per marker colour.
-    hue_sums: Vec<Vec<u32>>,
+    /// Summed-area table of the pattern's halves, one 16-bit lane each (see `compute_pattern`).
+    pattern_sum: Vec<u64>,
 }
 
-/// Summed-area table of `values` (row-major `w × h`) into `sum`, `(w + 1) × (h + 1)` with a zero border.
-fn integral(sum: &mut Vec<u32>, w: usize, h: usize, values: impl Iterator<Item = bool>) {
-    sum.clear();
-    sum.resize((w + 1) * (h + 1), 0);
-    let stride = w + 1;
-    let mut values = values;
-    for y in 0..h {
-        let mut row = 0u32;
-        for x in 0..w {
-            row += values.next().unwrap_or(false) as u32;
-            sum[(y + 1) * stride + x + 1] = sum[y * stride + x + 1] + row;
-        }
-    }
-}
+/// Lanes of [`FrameFeatures`]' packed summed-area table: the cloth's colour, then one per marker
+/// colour (a suit has at most [`MAX_MARKER_COLOURS`](crate::suit::MAX_MARKER_COLOURS)).
+const PATTERN_LANES: usize = 4;
+const LANE_BITS: u32 = 16;
 
 /// "No seed pixel" in a chamfer distance map.
 pub const FAR: u16 = u16::MAX / 2;
@@ -396,15 +384,14 @@ pub fn downscale(image: &RgbImage, factor: u32, out: &mut Vec<[u8; 3]>) -> (usiz
     let stride = image.width() as usize * 3;
     let area = (f * f) as u32;
     for y in 0..h {
+        let rows = &raw[y * f * stride..(y + 1) * f * stride];
         for x in 0..w {
             let mut sum = [0u32; 3];
-            for dy in 0..f {
-                let row = (y * f + dy) * stride + x * f * 3;
-                for dx in 0..f {
-                    let p = row + dx * 3;
-                    sum[0] += raw[p] as u32;
-                    sum[1] += raw[p + 1] as u32;
-                    sum[2] += raw[p + 2] as u32;
+            for row in rows.chunks_exact(stride) {
+                for p in row[x * f * 3..(x + 1) * f * 3].chunks_exact(3) {
+                    sum[0] += p[0] as u32;
+                    sum[1] += p[1] as u32;
+                    sum[2] += p[2] as u32;
                 }
             }
             out.push(sum.map(|s| ((s + area / 2) / area) as u8));
@@ -431,17 +418,27 @@ impl FrameFeatures {
         self.gradient_magnitude.clear();
         self.gradient.resize(width * height, 0);
         self.gradient_magnitude.resize(width * height, 0);
-        let val = |i: usize| self.colour[i].val as i32;
+        if width == 0 || height == 0 {
+            self.pattern.clear();
+            return;
+        }
         for y in 0..height {
+            let line = |y: usize| &self.colour[y * width..(y + 1) * width];
+            let (above, row, below) = (
+                line(y.saturating_sub(1)),
+                line(y),
+                line((y + 1).min(height - 1)),
+            );
+            let gradient = &mut self.gradient[y * width..(y + 1) * width];
+            let magnitude = &mut self.gradient_magnitude[y * width..(y + 1) * width];
             for x in 0..width {
-                let i = y * width + x;
-                let gh = val(y * width + (x + 1).min(width - 1))
-                    .abs_diff(val(y * width + x.saturating_sub(1)));
-                let gv = val((y + 1).min(height - 1) * width + x)
-                    .abs_diff(val(y.saturating_sub(1) * width + x));
-                let (bh, bv) = (gradient_bin(gh), gradient_bin(gv));
-                self.gradient[i] = (bh * GRADIENT_BINS + bv) as u8;
-                self.gradient_magnitude[i] = bh.max(bv) as u8;
+                let gh = row[(x + 1).min(width - 1)]
+                    .val
+                    .abs_diff(row[x.saturating_sub(1)].val);
+                let gv = below[x].val.abs_diff(above[x].val);
+                let (bh, bv) = (gradient_bin(gh as u32), gradient_bin(gv as u32));
+                gradient[x] = (bh * GRADIENT_BINS + bv) as u8;
+                magnitude[x] = bh.max(bv) as u8;
             }
         }
         self.compute_pattern(gate);
@@ -450,52 +447,58 @@ impl FrameFeatures {
     /// The pattern class of every pixel from box sums (integral images) of the marker and cloth
     /// indicators over a [`pattern_radius`] window. On the suit every pixel sees both halves of the
     /// pattern; inside a red poster or a lawn, or a few pixels off the person, it does not.
+    ///
+    /// The four indicators (cloth, and each marker colour) share one summed-area table, a 16-bit
+    /// lane each of a `u64`: sums of the whole image overflow a lane, but in wrapping arithmetic a
+    /// box sum `a + d − b − c` is exact lane by lane as long as each lane's count in the box fits
+    /// 16 bits, which a window of at most 65,535 pixels guarantees.
     fn compute_pattern(&mut self, gate: &MarkerGate) {
         let (w, h) = (self.width, self.height);
-        // Per pixel: 0 neither, k + 1 marker colour k, CLOTH the cloth's colour.
-        const CLOTH: u8 = u8::MAX;
-        self.codes.clear();
-        self.codes
-            .extend(self.colour.iter().map(|&c| match gate.marker_index(c) {
-                Some(k) => k as u8 + 1,
-                None if gate.is_cloth(c) => CLOTH,
-                None => 0,
-            }));
-        integral(
-            &mut self.cloth_sum,
-            w,
-            h,
-            self.codes.iter().map(|&c| c == CLOTH),
-        );
-        let markers = gate.markers();
-        self.hue_sums.resize_with(markers, Vec::new);
-        for (k, sum) in self.hue_sums.iter_mut().enumerate() {
-            let code = k as u8 + 1;
-            integral(sum, w, h, self.codes.iter().map(|&c| c == code));
-        }
-        self.pattern.clear();
         let r = pattern_radius(h);
+        debug_assert!((2 * r + 1).pow(2) < 1 << LANE_BITS);
+        debug_assert!(gate.markers() < PATTERN_LANES);
+        // Per pixel: the lane of the half of the pattern it has (cloth, marker k), or none.
+        let lane_of = |c: PixelColour| -> u64 {
+            match gate.marker_index(c) {
+                Some(k) if k + 1 < PATTERN_LANES => 1 << (LANE_BITS as usize * (k + 1)),
+                Some(_) => 0,
+                None if gate.is_cloth(c) => 1,
+                None => 0,
+            }
+        };
         let stride = w + 1;
+        self.pattern_sum.clear();
+        self.pattern_sum.resize(stride * (h + 1), 0);
+        for y in 0..h {
+            let mut row = 0u64;
+            for x in 0..w {
+                row = row.wrapping_add(lane_of(self.colour[y * w + x]));
+                self.pattern_sum[(y + 1) * stride + x + 1] =
+                    self.pattern_sum[y * stride + x + 1].wrapping_add(row);
+            }
+        }
+        let lane = |sums: u64, k: usize| ((sums >> (LANE_BITS as usize * k)) & 0xffff) as u32;
+        let markers = gate.markers().min(PATTERN_LANES - 1);
+        let sum = &self.pattern_sum;
+        self.pattern.clear();
         for y in 0..h {
             let (y0, y1) = (y.saturating_sub(r), (y + r + 1).min(h));
             for x in 0..w {
                 let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(w));
-                let boxed = |sum: &[u32]| {
-                    sum[y1 * stride + x1] + sum[y0 * stride + x0]
-                        - sum[y0 * stride + x1]
-                        - sum[y1 * stride + x0]
-                };
+                let boxed = sum[y1 * stride + x1]
+                    .wrapping_add(sum[y0 * stride + x0])
+                    .wrapping_sub(sum[y0 * stride + x1])
+                    .wrapping_sub(sum[y1 * stride + x0]);
                 let area = ((y1 - y0) * (x1 - x0)) as f32;
-                let code = self.codes[y * w + x];
-                let own = (code != CLOTH && code > 0).then(|| code as usize - 1);
+                let own = gate.marker_index(self.colour[y * w + x]);
                 let (mut markers_seen, mut present) = (0u32, 0usize);
-                for (k, sum) in self.hue_sums.iter().enumerate() {
-                    let n = boxed(sum);
+                for k in 0..markers {
+                    let n = lane(boxed, k + 1);
                     markers_seen += n;
                     present += (n > 0 && Some(k) != own) as usize;
                 }
                 let (other, mixed) = match own {
-                    Some(_) => (boxed(&self.cloth_sum), present >= 1),
+                    Some(_) => (lane(boxed, 0), present >= 1),
                     None => (markers_seen, present >= 2),
                 };
                 self.pattern.push(mixed_pattern_class(

@@ -28,11 +28,11 @@ use std::time::Instant;
 use image::RgbImage;
 
 use super::cleanup::{
-    attach_parts, fill_holes, keep_person_region, part_band, CleanupReport, PART_REACH,
+    attach_parts, clean, distance_near, part_band, CleanupReport, PixelBox, PART_REACH,
 };
 use super::features::{
-    chamfer, colour_index, contrast_bin, downscale, is_suit_pattern, temporal_bin, ColourLut,
-    FrameFeatures, MarkerGate, COLOUR_BINS, FAR, PATTERN_CLASSES, TEMPORAL_BINS,
+    colour_index, contrast_bin, downscale, is_suit_pattern, temporal_bin, ColourLut, FrameFeatures,
+    MarkerGate, COLOUR_BINS, PATTERN_CLASSES, TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
 use super::tables::SegmenterTables;
@@ -84,11 +84,13 @@ pub struct StageTimes {
     pub cut: f64,
     pub cleanup: f64,
     pub refine: f64,
+    /// Learning the room's colours and keeping this frame for the next one's motion terms.
+    pub history: f64,
 }
 
 impl StageTimes {
     pub fn total(&self) -> f64 {
-        self.features + self.graph + self.cut + self.cleanup + self.refine
+        self.features + self.graph + self.cut + self.cleanup + self.refine + self.history
     }
 }
 
@@ -118,7 +120,9 @@ pub struct Segmenter {
     previous_mask: Option<Vec<bool>>,
     before_previous_mask: Option<Vec<bool>>,
     ids: Vec<u32>,
-    unary: Vec<[f32; 2]>,
+    crop: Vec<bool>,
+    /// The unary tables multiplied by their weights σ (see [`UnaryTables`]).
+    unary_tables: UnaryTables,
     /// Online background colour histogram over colour bins (sums to 1 once it exists).
     online_background: Option<Vec<f32>>,
     /// Background colour NLL per joint colour × pattern index used for the current frame.
@@ -143,6 +147,32 @@ fn marginal_nll(joint: &[f32]) -> Vec<f32> {
             -(p.max(1e-6)).ln()
         })
         .collect()
+}
+
+/// The tables of the unary terms, each multiplied by its weight σ once, so that a pixel's energy is
+/// a sum of lookups: colour × pattern (C), gradient (G), motion (M), the second-order temporal
+/// prior (T) and the label prior used when there is no history.
+#[derive(Clone, Debug)]
+struct UnaryTables {
+    colour: [Vec<f32>; 2],
+    gradient: [Vec<f32>; 2],
+    motion: [Vec<f32>; 4],
+    temporal: [f32; 8],
+    prior: [f32; 2],
+}
+
+impl UnaryTables {
+    fn new(t: &SegmenterTables) -> UnaryTables {
+        let s = t.weights;
+        let scaled = |table: &[f32], sigma: f32| table.iter().map(|v| sigma * v).collect();
+        UnaryTables {
+            colour: [0, 1].map(|l| scaled(&t.colour[l], s.colour)),
+            gradient: [0, 1].map(|l| scaled(&t.gradient[l], s.gradient)),
+            motion: [0, 1, 2, 3].map(|k| scaled(&t.motion[k], s.motion)),
+            temporal: t.temporal.map(|v| s.temporal * v),
+            prior: t.prior.map(|v| s.temporal * v),
+        }
+    }
 }
 
 impl Segmenter {
@@ -177,6 +207,7 @@ impl Segmenter {
         });
         let background_colour = tables.colour[0].clone();
         let background_bin = marginal_nll(&tables.colour[0]);
+        let unary_tables = UnaryTables::new(&tables);
         Segmenter {
             tables,
             options,
@@ -191,7 +222,8 @@ impl Segmenter {
             previous_mask: None,
             before_previous_mask: None,
             ids: Vec::new(),
-            unary: Vec::new(),
+            crop: Vec::new(),
+            unary_tables,
             online_background: None,
             background_colour,
             background_pattern,
@@ -225,16 +257,24 @@ impl Segmenter {
             return;
         }
         let (w, h) = (self.features.width, self.features.height);
-        self.distance.clear();
-        self.distance
-            .extend(labels.iter().map(|&l| if l { 0 } else { FAR }));
-        chamfer(&mut self.distance, w, h);
+        // Pixels farther than the margin from the person: everything outside the box of
+        // `distance_near`, and the far pixels inside it.
+        let margin = o.adapt_margin as usize;
+        let near = distance_near(labels, w, h, margin + 1, &mut self.distance);
         let mut histogram = vec![0.0f32; COLOUR_BINS];
         let mut total = 0.0f32;
-        for (i, &d) in self.distance.iter().enumerate() {
-            if d as u32 > 3 * o.adapt_margin {
-                histogram[self.features.colour[i].bin as usize] += 1.0;
-                total += 1.0;
+        for y in 0..h {
+            for x in 0..w {
+                let far = match near {
+                    Some(b) if b.contains(x, y) => {
+                        self.distance[(y - b.y0) * b.width() + x - b.x0] as usize > 3 * margin
+                    }
+                    _ => true,
+                };
+                if far {
+                    histogram[self.features.colour[y * w + x].bin as usize] += 1.0;
+                    total += 1.0;
+                }
             }
         }
         if total < 1.0 {
@@ -288,66 +328,49 @@ impl Segmenter {
             self.graph = GridGraph::new(w, h);
             self.reset();
         }
-        let t = &self.tables;
-        let s = t.weights;
+        let u = &self.unary_tables;
         let f = &self.features;
-        self.unary.clear();
-        self.unary.reserve(w * h);
         let history = self.previous.as_ref().zip(self.previous_mask.as_ref());
+        let before_previous = self.before_previous_mask.as_deref();
+        let (source, sink, right, down) = self.graph.parts_mut();
         for i in 0..w * h {
             let c = f.colour[i];
             let colour = colour_index(c, f.pattern[i]);
-            let mut u = [0usize, 1].map(|l| {
-                s.colour * t.colour[l][colour] + s.gradient * t.gradient[l][f.gradient[i] as usize]
-            });
+            let gradient = f.gradient[i] as usize;
+            let mut e = [0, 1].map(|l| u.colour[l][colour] + u.gradient[l][gradient]);
             match history {
                 Some((prev, prev_mask)) => {
                     let dt = c.val.abs_diff(prev.colour[i].val) as u32;
                     let bin = f.gradient_magnitude[i] as usize * TEMPORAL_BINS + temporal_bin(dt);
                     let lp = prev_mask[i] as usize;
-                    for (l, ul) in u.iter_mut().enumerate() {
-                        *ul += s.motion * t.motion[2 * l + lp][bin];
-                    }
-                    match &self.before_previous_mask {
-                        Some(pp) => {
-                            let lpp = pp[i] as usize;
-                            for (l, ul) in u.iter_mut().enumerate() {
-                                *ul += s.temporal * t.temporal[4 * l + 2 * lp + lpp];
-                            }
-                        }
-                        None => {
-                            for (l, ul) in u.iter_mut().enumerate() {
-                                *ul += s.temporal * t.prior[l];
-                            }
-                        }
+                    for (l, el) in e.iter_mut().enumerate() {
+                        *el += u.motion[2 * l + lp][bin]
+                            + match before_previous {
+                                Some(pp) => u.temporal[4 * l + 2 * lp + pp[i] as usize],
+                                None => u.prior[l],
+                            };
                     }
                 }
                 None => {
-                    for (l, ul) in u.iter_mut().enumerate() {
-                        *ul += s.temporal * t.prior[l];
-                    }
+                    e[0] += u.prior[0];
+                    e[1] += u.prior[1];
                 }
             }
-            self.unary.push(u);
+            let m = e[0].min(e[1]);
+            source[i] = e[0] - m; // cost of labelling i background
+            sink[i] = e[1] - m; // cost of labelling i person
         }
-        let (source, sink, right, down) = self.graph.parts_mut();
         for y in 0..h {
-            for x in 0..w {
-                let i = y * w + x;
-                if x + 1 < w {
-                    let bin = contrast_bin(f.colour[i], f.colour[i + 1]);
-                    right[y * (w - 1) + x] = self.edge_weight[bin];
-                }
-                if y + 1 < h {
-                    let bin = contrast_bin(f.colour[i], f.colour[i + w]);
-                    down[i] = self.edge_weight[bin];
+            let row = &f.colour[y * w..(y + 1) * w];
+            for (x, pair) in row.windows(2).enumerate() {
+                right[y * (w - 1) + x] = self.edge_weight[contrast_bin(pair[0], pair[1])];
+            }
+            if y + 1 < h {
+                let below = &f.colour[(y + 1) * w..(y + 2) * w];
+                for (x, (&a, &b)) in row.iter().zip(below).enumerate() {
+                    down[y * w + x] = self.edge_weight[contrast_bin(a, b)];
                 }
             }
-        }
-        for (i, u) in self.unary.iter().enumerate() {
-            let m = u[0].min(u[1]);
-            source[i] = u[0] - m; // cost of labelling i background
-            sink[i] = u[1] - m; // cost of labelling i person
         }
     }
 
@@ -370,6 +393,7 @@ impl Segmenter {
             b.cut += a.cut;
             b.cleanup += a.cleanup;
             b.refine += a.refine;
+            b.history += a.history;
             return second;
         }
         self.segment_once(frame)
@@ -420,48 +444,47 @@ impl Segmenter {
                 (0, 2),
             ];
             debug_assert_eq!(super::features::SUIT_RADIUS, 2);
-            for y in 0..h {
-                for x in 0..w {
-                    let i = y * w + x;
-                    if labels[i] {
-                        labels[i] = NEAR.iter().any(|&(dx, dy)| {
-                            let (nx, ny) = (x as isize + dx, y as isize + dy);
-                            nx >= 0
-                                && ny >= 0
-                                && (nx as usize) < w
-                                && (ny as usize) < h
-                                && seed(ny as usize * w + nx as usize)
-                        });
+            if let Some(b) = PixelBox::around(&labels, w, h, 0) {
+                for y in b.y0..b.y1 {
+                    for x in b.x0..b.x1 {
+                        let i = y * w + x;
+                        if labels[i] {
+                            labels[i] = NEAR.iter().any(|&(dx, dy)| {
+                                let (nx, ny) = (x as isize + dx, y as isize + dy);
+                                nx >= 0
+                                    && ny >= 0
+                                    && (nx as usize) < w
+                                    && (ny as usize) < h
+                                    && seed(ny as usize * w + nx as usize)
+                            });
+                        }
                     }
                 }
             }
         }
         let n = (w * h) as f32;
+        let max_hole = (self.options.max_hole_fraction * n) as usize;
         let (colours, pattern) = (&self.features.colour, &self.features.pattern);
         let mut ids = std::mem::take(&mut self.ids);
-        let mut report = keep_person_region(
+        let mut crop = std::mem::take(&mut self.crop);
+        // Suit cloth next to a marker: what only the suit looks like (a red poster is all marker
+        // colour, a lawn all cloth colour, neither has the two interleaved).
+        let score = |i: usize| {
+            if is_suit_pattern(pattern[i], 3) && self.gate.is_cloth(colours[i]) {
+                1.0
+            } else {
+                0.01
+            }
+        };
+        let min_area = (self.options.min_person_fraction * n).ceil() as usize;
+        let mut report = clean(
             &mut labels,
             w,
             h,
-            // Suit cloth next to a marker: what only the suit looks like (a red poster is all marker
-            // colour, a lawn all cloth colour, neither has the two interleaved).
-            |i| {
-                if is_suit_pattern(pattern[i], 3) && self.gate.is_cloth(colours[i]) {
-                    1.0
-                } else {
-                    0.01
-                }
-            },
-            (self.options.min_person_fraction * n).ceil() as usize,
+            Some((&score, min_area)),
+            max_hole,
+            &mut crop,
             &mut ids,
-        );
-        fill_holes(
-            &mut labels,
-            w,
-            h,
-            (self.options.max_hole_fraction * n) as usize,
-            &mut ids,
-            &mut report,
         );
         // The parts outside the suit: band pixels whose colour is likelier a part than background.
         let mut person = labels.clone();
@@ -492,16 +515,12 @@ impl Segmenter {
             &mut self.stack,
         );
         if added > 0 {
-            fill_holes(
-                &mut person,
-                w,
-                h,
-                (self.options.max_hole_fraction * n) as usize,
-                &mut ids,
-                &mut report,
-            );
+            let filled = clean(&mut person, w, h, None, max_hole, &mut crop, &mut ids);
+            report.holes_filled += filled.holes_filled;
+            report.pixels_filled += filled.pixels_filled;
         }
         self.ids = ids;
+        self.crop = crop;
         times.cleanup = ms(started);
 
         let started = Instant::now();
@@ -509,6 +528,7 @@ impl Segmenter {
         times.refine = ms(started);
 
         // History for the next frame.
+        let started = Instant::now();
         self.adapt_background(&person);
         self.before_previous_mask = self.previous_mask.take();
         self.previous_mask = Some(labels);
@@ -516,6 +536,7 @@ impl Segmenter {
             self.previous.get_or_insert_with(FrameFeatures::default),
             &mut self.features,
         );
+        times.history = ms(started);
         Segmentation {
             mask,
             cleanup: report,
@@ -564,13 +585,30 @@ impl Segmenter {
                 x + 1
             };
         }
+        // A cell with no corner in the box around the person grown by a pixel is background and
+        // not near an edge: the output there stays background.
+        let Some(b) = PixelBox::around(labels, w, h, 1) else {
+            return Mask::from_pixels(fw, fh, out).unwrap_or_else(|| Mask::empty(fw, fh));
+        };
+        let touches = |c0: usize, start: usize, end: usize| c0 + 1 >= start && c0 < end;
+        let first_x = columns
+            .iter()
+            .position(|&c| touches(c as usize, b.x0, b.x1))
+            .unwrap_or(fw_us);
+        let end_x = columns
+            .iter()
+            .position(|&c| c as usize >= b.x1)
+            .unwrap_or(fw_us);
         for y in 0..fh as usize {
             let sy = ((y as f32 + 0.5) / f - 0.5).clamp(0.0, (h - 1) as f32);
             let (y0, ty) = (sy as usize, sy.fract());
+            if !touches(y0, b.y0, b.y1) {
+                continue;
+            }
             let y1 = (y0 + 1).min(h - 1);
             let row = &mut out[y * fw_us..(y + 1) * fw_us];
-            let mut x = 0;
-            while x < fw_us {
+            let mut x = first_x;
+            while x < end_x {
                 let x0 = columns[x] as usize;
                 let x1 = (x0 + 1).min(w - 1);
                 let end = run_end[x];
@@ -628,22 +666,28 @@ impl Segmenter {
 /// Per pixel of a `w`×`h` label grid: does its 3×3 neighbourhood (clipped at the border) hold both
 /// labels? Row-wise any/all over three columns, then over three rows.
 fn mixed_3x3(labels: &[bool], w: usize, h: usize) -> Vec<bool> {
-    let (mut any, mut all) = (vec![false; w * h], vec![false; w * h]);
-    for y in 0..h {
-        let row = &labels[y * w..(y + 1) * w];
-        for x in 0..w {
-            let window = &row[x.saturating_sub(1)..(x + 2).min(w)];
-            any[y * w + x] = window.iter().any(|&l| l);
-            all[y * w + x] = window.iter().all(|&l| l);
+    let mut mixed = vec![false; w * h];
+    // Only pixels in the box around the set ones grown by a pixel can be mixed; windows clipped
+    // to that box see the same labels (its edge is unset, and so is everything beyond).
+    let Some(b) = PixelBox::around(labels, w, h, 1) else {
+        return mixed;
+    };
+    let (bw, bh) = (b.width(), b.height());
+    let (mut any, mut all) = (vec![false; bw * bh], vec![false; bw * bh]);
+    for y in 0..bh {
+        let row = &labels[(b.y0 + y) * w + b.x0..(b.y0 + y) * w + b.x1];
+        for x in 0..bw {
+            let window = &row[x.saturating_sub(1)..(x + 2).min(bw)];
+            any[y * bw + x] = window.iter().any(|&l| l);
+            all[y * bw + x] = window.iter().all(|&l| l);
         }
     }
-    let mut mixed = vec![false; w * h];
-    for y in 0..h {
-        let (y0, y1) = (y.saturating_sub(1), (y + 2).min(h));
-        for x in 0..w {
-            let some = (y0..y1).any(|ny| any[ny * w + x]);
-            let every = (y0..y1).all(|ny| all[ny * w + x]);
-            mixed[y * w + x] = some && !every;
+    for y in 0..bh {
+        let (y0, y1) = (y.saturating_sub(1), (y + 2).min(bh));
+        for x in 0..bw {
+            let some = (y0..y1).any(|ny| any[ny * bw + x]);
+            let every = (y0..y1).all(|ny| all[ny * bw + x]);
+            mixed[(b.y0 + y) * w + b.x0 + x] = some && !every;
         }
     }
     mixed
