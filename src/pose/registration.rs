@@ -4,8 +4,8 @@
 //! The regressed root offset and the head/hand/shoe correction ([`super::correction`]) leave the body
 //! several centimetres off in the image, which the pose angles do not care about but a garment drawn
 //! over the video does. Here the template body (head, hands and shoes included, as in the
-//! segmenter's masks), posed by the frame, is rasterized at a quarter of the resolution
-//! ([`BodyMasker`]), and the integer shift within ±15 % of the image width that puts most model
+//! segmenter's masks), posed by the frame, is rasterized on a grid about 160 cells wide (a quarter
+//! of the resolution at 640 × 480; [`BodyMasker`]), and the integer shift within ±15 % of the image width that puts most model
 //! pixels on the (block-reduced) silhouette is found coarse to fine; the root moves parallel to the
 //! image plane by that shift × depth / focal length. Overlap, unlike aligning centroids, is not
 //! dragged by a segmentation leak or by legs leaving the picture: a leak adds the same pixels to
@@ -30,8 +30,10 @@ pub struct Registration {
     masker: BodyMasker,
     depth: DepthBuffer,
     world: Vec<Affine3A>,
-    /// Resolution divisor of the model's rasterization.
-    pub downscale: u32,
+    /// The model is rasterized and compared on a grid about this many cells wide: the resolution
+    /// divisor is the image width over it (4 at 640 pixels, 9 at 1440), so the search costs the
+    /// same at every camera resolution.
+    pub cells_across: u32,
 }
 
 impl Registration {
@@ -42,7 +44,7 @@ impl Registration {
             masker: BodyMasker::new(body),
             depth: DepthBuffer::new(1, 1),
             world: Vec::new(),
-            downscale: 4,
+            cells_across: 160,
         }
     }
 
@@ -60,13 +62,14 @@ impl Registration {
         if root_position.iter().any(|&c| c >= frame.len()) || silhouette.is_empty() {
             return None;
         }
-        let small = downscaled(camera, self.downscale);
-        let factor = self.downscale as f32;
+        let downscale = (camera.intrinsics.width / self.cells_across.max(1)).max(1);
+        let small = downscaled(camera, downscale);
+        let factor = downscale as f32;
         skeleton.forward_kinematics(frame, &mut self.world);
         let model = self.masker.mask(&self.world, &small, &mut self.depth);
         let target = block_mask(
             silhouette,
-            self.downscale,
+            downscale,
             small.intrinsics.width,
             small.intrinsics.height,
         );
