@@ -417,6 +417,7 @@ fn segment(
     let (mut frames, mut skipped) = (0usize, Vec::new());
     let mut times = Vec::new();
     let mut ious: Vec<(f64, String)> = Vec::new();
+    let mut agreements = Vec::new();
     let (mut cleaned_frames, mut removed_px, mut filled_px, mut empty_frames) =
         (0usize, 0usize, 0usize, 0usize);
     loop {
@@ -457,7 +458,9 @@ fn segment(
             let gt = image::open(&truth_path)
                 .with_context(|| format!("cannot read {}", truth_path.display()))?
                 .to_luma8();
-            ious.push((result.mask.iou(&Mask::from_gray(&gt)), name.clone()));
+            let agreement = result.mask.agreement(&Mask::from_gray(&gt));
+            ious.push((agreement.iou(), name.clone()));
+            agreements.push(agreement);
         }
         frames += 1;
     }
@@ -490,11 +493,17 @@ fn segment(
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map(|(v, n)| (*v, n.clone()))
             .unwrap_or_default();
+        let shares: Vec<(f64, f64)> = agreements.iter().map(|a| a.missed_and_extra()).collect();
+        let (missed, extra) = shares
+            .iter()
+            .fold((0.0, 0.0), |(m, e), &(a, b)| (m + a, e + b));
         println!(
-            "IoU against {}: mean {mean:.4}, worst {:.4} ({})",
+            "IoU against {}: mean {mean:.4}, worst {:.4} ({}); per frame on average {:.1} % of the person missed, {:.1} % of its area added",
             truth.map(|t| t.display().to_string()).unwrap_or_default(),
             worst.0,
-            worst.1
+            worst.1,
+            100.0 * missed / shares.len() as f64,
+            100.0 * extra / shares.len() as f64,
         );
     }
     Ok(())

@@ -98,16 +98,47 @@ impl Mask {
 
     /// Intersection over union with `other` (same size); 1 when both are empty.
     pub fn iou(&self, other: &Mask) -> f64 {
-        let (mut inter, mut union) = (0usize, 0usize);
-        for (&a, &b) in self.pixels.iter().zip(&other.pixels) {
-            inter += (a && b) as usize;
-            union += (a || b) as usize;
+        self.agreement(other).iou()
+    }
+
+    /// Pixel counts of this mask against a `truth` of the same size.
+    pub fn agreement(&self, truth: &Mask) -> Agreement {
+        let mut counts = Agreement::default();
+        for (&a, &b) in self.pixels.iter().zip(&truth.pixels) {
+            counts.both += (a && b) as usize;
+            counts.missed += (!a && b) as usize;
+            counts.extra += (a && !b) as usize;
         }
+        counts
+    }
+}
+
+/// How a mask agrees with the true one, in pixels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Agreement {
+    /// Set in both.
+    pub both: usize,
+    /// Set in the truth only.
+    pub missed: usize,
+    /// Set in the mask only.
+    pub extra: usize,
+}
+
+impl Agreement {
+    /// Intersection over union; 1 when both masks are empty.
+    pub fn iou(&self) -> f64 {
+        let union = self.both + self.missed + self.extra;
         if union == 0 {
             1.0
         } else {
-            inter as f64 / union as f64
+            self.both as f64 / union as f64
         }
+    }
+
+    /// Shares of the true area missed and added; 0 when the truth is empty.
+    pub fn missed_and_extra(&self) -> (f64, f64) {
+        let truth = (self.both + self.missed).max(1) as f64;
+        (self.missed as f64 / truth, self.extra as f64 / truth)
     }
 }
 
@@ -121,6 +152,12 @@ mod tests {
         let a = Mask::from_pixels(4, 4, (0..16).map(|i| i % 4 < 2).collect()).expect("size");
         let b = Mask::from_pixels(4, 4, (0..16).map(|i| i < 8).collect()).expect("size");
         assert!((a.iou(&b) - 4.0 / 12.0).abs() < 1e-12);
+        let agreement = a.agreement(&b);
+        assert_eq!(
+            (agreement.both, agreement.missed, agreement.extra),
+            (4, 4, 4)
+        );
+        assert_eq!(agreement.missed_and_extra(), (0.5, 0.5));
         assert_eq!(a.iou(&a), 1.0);
         assert_eq!(Mask::empty(4, 4).iou(&Mask::empty(4, 4)), 1.0);
         assert_eq!(a.bounding_box(), Some((0, 0, 2, 4)));

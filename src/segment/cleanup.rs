@@ -56,13 +56,19 @@ pub fn components(
 }
 
 /// Keeps the foreground component with the highest total `score` (ties: the larger) if it has at least
-/// `min_area` pixels; clears everything else. With no component that large the mask becomes empty.
+/// `min_area` pixels, and with it the other components of at least a quarter of `min_area` whose
+/// score per pixel is at least half of its own and that come within `reach` × its height of it
+/// (0: none). The person is one region unless something in front of them — their own hand on
+/// the hip, a passing object — cuts the suit in two; the pieces are then as suit-like as the main
+/// one and near it, while a leak into the room is neither. Everything else is cleared; with no
+/// component that large the mask becomes empty.
 pub fn keep_person_region(
     labels: &mut [bool],
     width: usize,
     height: usize,
     score: impl Fn(usize) -> f32,
     min_area: usize,
+    reach: f32,
     ids: &mut Vec<u32>,
 ) -> CleanupReport {
     let stats = components(labels, width, height, true, ids);
@@ -79,15 +85,40 @@ pub fn keep_person_region(
                 .total_cmp(&scores[b])
                 .then(stats[a].0.cmp(&stats[b].0))
         });
+    let mut keep = vec![false; stats.len()];
+    if let Some(best) = best {
+        keep[best] = true;
+        let main: Vec<bool> = ids.iter().map(|&id| id == best as u32).collect();
+        let pixels = (reach * region_height(&main, width) as f32).ceil() as usize;
+        let density = |c: usize| scores[c] / stats[c].0 as f32;
+        let candidate =
+            |c: usize| c != best && 4 * stats[c].0 >= min_area && density(c) >= 0.5 * density(best);
+        let mut distance = Vec::new();
+        if pixels > 0 && (0..stats.len()).any(candidate) {
+            if let Some(b) = distance_near(&main, width, height, pixels, &mut distance) {
+                for y in b.y0..b.y1 {
+                    for x in b.x0..b.x1 {
+                        let id = ids[y * width + x];
+                        if id != u32::MAX
+                            && candidate(id as usize)
+                            && distance[(y - b.y0) * b.width() + x - b.x0] as usize <= 3 * pixels
+                        {
+                            keep[id as usize] = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
     let mut report = CleanupReport::default();
     for (c, &(count, _)) in stats.iter().enumerate() {
-        if Some(c) != best {
+        if !keep[c] {
             report.components_removed += 1;
             report.pixels_removed += count;
         }
     }
     for (label, &id) in labels.iter_mut().zip(ids.iter()) {
-        if id != u32::MAX && Some(id as usize) != best {
+        if id != u32::MAX && !keep[id as usize] {
             *label = false;
         }
     }
@@ -187,7 +218,7 @@ impl PixelBox {
     }
 }
 
-/// [`keep_person_region`] (when `score` is given) then [`fill_holes`], computed on the box around the
+/// [`keep_person_region`] (when `score`, `min_area` and `reach` are given) then [`fill_holes`], computed on the box around the
 /// foreground grown by one pixel and clipped to the grid: the same result as on the whole grid, in
 /// time that grows with the person rather than the frame. Every foreground component lies inside
 /// the box; the box's edge is background, and a background component that touches it is joined to
@@ -197,7 +228,7 @@ pub fn clean(
     labels: &mut [bool],
     width: usize,
     height: usize,
-    score: Option<(&dyn Fn(usize) -> f32, usize)>,
+    score: Option<(&dyn Fn(usize) -> f32, usize, f32)>,
     max_hole: usize,
     crop: &mut Vec<bool>,
     ids: &mut Vec<u32>,
@@ -208,12 +239,13 @@ pub fn clean(
     b.crop(labels, width, crop);
     let (bw, bh) = (b.width(), b.height());
     let mut report = match score {
-        Some((score, min_area)) => keep_person_region(
+        Some((score, min_area, reach)) => keep_person_region(
             crop,
             bw,
             bh,
             |i| score(b.grid_index(i, width)),
             min_area,
+            reach,
             ids,
         ),
         None => CleanupReport::default(),
@@ -294,13 +326,17 @@ pub fn part_band(
 
 /// Adds to the person the band pixels (see [`part_band`]) that look like a part of the person
 /// (`part_like`) and are 4-connected to the suit through such pixels; `person` starts as the suit
-/// and ends as suit + parts, `part` marks the added pixels. Returns how many were added.
+/// and ends as suit + parts, `part` marks the added pixels. A connected piece of added pixels larger
+/// than `max_part` is not a head, a hand or a shoe but background of a part's colour that the flood
+/// ran into along the suit, and is taken back. Returns how many pixels were added.
+#[allow(clippy::too_many_arguments)]
 pub fn attach_parts(
     person: &mut [bool],
     band: &[bool],
     width: usize,
     height: usize,
     part_like: impl Fn(usize) -> bool,
+    max_part: usize,
     part: &mut Vec<bool>,
     stack: &mut Vec<usize>,
 ) -> usize {
@@ -308,16 +344,33 @@ pub fn attach_parts(
     part.resize(person.len(), false);
     stack.clear();
     stack.extend((0..person.len()).filter(|&i| person[i]));
-    let mut added = 0;
     while let Some(i) = stack.pop() {
         for_each_neighbour(i, width, height, |j| {
             if band[j] && !person[j] && part_like(j) {
                 person[j] = true;
                 part[j] = true;
-                added += 1;
                 stack.push(j);
             }
         });
+    }
+    let Some(b) = PixelBox::around(part, width, height, 0) else {
+        return 0;
+    };
+    let (mut crop, mut ids) = (Vec::new(), Vec::new());
+    b.crop(part, width, &mut crop);
+    let stats = components(&crop, b.width(), b.height(), true, &mut ids);
+    let mut added = 0;
+    for (k, &id) in ids.iter().enumerate() {
+        if id == u32::MAX {
+            continue;
+        }
+        if stats[id as usize].0 > max_part {
+            let i = b.grid_index(k, width);
+            person[i] = false;
+            part[i] = false;
+        } else {
+            added += 1;
+        }
     }
     added
 }
@@ -359,7 +412,7 @@ mod tests {
         let (mut m, w, h) = grid(&["##...", "##..#", ".....", "...##"]);
         let mut ids = Vec::new();
         // Equal scores: the larger (the 2×2 block) wins.
-        let report = keep_person_region(&mut m, w, h, |_| 1.0, 1, &mut ids);
+        let report = keep_person_region(&mut m, w, h, |_| 1.0, 1, 0.0, &mut ids);
         assert_eq!(m, grid(&["##...", "##...", ".....", "....."]).0);
         assert_eq!(
             report,
@@ -377,16 +430,46 @@ mod tests {
             h,
             |i| if i >= 18 { 10.0 } else { 1.0 },
             1,
+            0.0,
             &mut ids,
         );
         assert_eq!(m, grid(&[".....", ".....", ".....", "...##"]).0);
     }
 
     #[test]
+    fn suit_like_pieces_near_the_person_are_kept() {
+        // A 4-row body cut at row 4 (a hand on the hip), a near piece below it, a far one at the
+        // bottom right, and a sparse one (score 0.1 per pixel) beside it.
+        let (mut m, w, h) = grid(&[
+            "##......", "##......", "##......", "##......", "........", "##....##", "##....##",
+            "........", "........", "......##",
+        ]);
+        let score = |i: usize| {
+            if (5 * 8..7 * 8).contains(&i) && i % 8 >= 6 {
+                0.1
+            } else {
+                1.0
+            }
+        };
+        let mut ids = Vec::new();
+        // Reach 0.5 × 4 rows = 2 pixels: the piece below (1 row away) is kept, the others are not.
+        let report = keep_person_region(&mut m, w, h, score, 4, 0.5, &mut ids);
+        assert_eq!(
+            m,
+            grid(&[
+                "##......", "##......", "##......", "##......", "........", "##......", "##......",
+                "........", "........", "........",
+            ])
+            .0
+        );
+        assert_eq!((report.components_removed, report.pixels_removed), (2, 6));
+    }
+
+    #[test]
     fn too_small_a_region_leaves_an_empty_mask() {
         let (mut m, w, h) = grid(&["#....", ".....", "....#"]);
         let mut ids = Vec::new();
-        keep_person_region(&mut m, w, h, |_| 1.0, 2, &mut ids);
+        keep_person_region(&mut m, w, h, |_| 1.0, 2, 0.0, &mut ids);
         assert!(m.iter().all(|&p| !p));
     }
 
@@ -409,13 +492,18 @@ mod tests {
         let like = |i: usize| i / w == 1 || i == 5 * w + 6;
         let mut person = suit.clone();
         let (mut part, mut stack) = (Vec::new(), Vec::new());
-        let added = attach_parts(&mut person, &band, w, h, like, &mut part, &mut stack);
+        let added = attach_parts(&mut person, &band, w, h, like, 3, &mut part, &mut stack);
         assert_eq!(added, 3);
         assert_eq!(
             &person[w..2 * w],
             &[true, true, true, true, true, false, false, false]
         );
         assert!(part[w] && part[w + 3] && part[w + 4] && !part[w + 1] && !part[5 * w + 6]);
+        // A cap of 1 pixel per piece takes the 2-pixel piece at x = 3..=4 back.
+        let mut person = suit.clone();
+        let added = attach_parts(&mut person, &band, w, h, like, 1, &mut part, &mut stack);
+        assert_eq!(added, 1);
+        assert!(person[w] && !person[w + 3] && !person[w + 4] && !part[w + 3]);
     }
 
     #[test]
@@ -466,6 +554,7 @@ mod tests {
             width in 1usize..16,
             min_area in 1usize..6,
             max_hole in 0usize..8,
+            reach in 0.0f32..1.0,
         ) {
             let height = cells.len() / width;
             proptest::prop_assume!(height > 0);
@@ -473,10 +562,10 @@ mod tests {
             let score = |i: usize| (i % 7) as f32;
             let mut ids = Vec::new();
             let mut whole = labels.to_vec();
-            let mut expected = keep_person_region(&mut whole, width, height, score, min_area, &mut ids);
+            let mut expected = keep_person_region(&mut whole, width, height, score, min_area, reach, &mut ids);
             fill_holes(&mut whole, width, height, max_hole, &mut ids, &mut expected);
             let mut boxed = labels.to_vec();
-            let report = clean(&mut boxed, width, height, Some((&score, min_area)), max_hole, &mut Vec::new(), &mut ids);
+            let report = clean(&mut boxed, width, height, Some((&score, min_area, reach)), max_hole, &mut Vec::new(), &mut ids);
             proptest::prop_assert_eq!(&boxed, &whole);
             // The box leaves out background outside it, which is never a hole or removed region.
             proptest::prop_assert_eq!(report, expected);

@@ -14,10 +14,12 @@
 //!    [`SegmenterOptions::adapt_margin`] pixels from the person, decaying by
 //!    [`SegmenterOptions::adapt_rate`] per frame), as bilayer segmenters do: the 20 training frames
 //!    cannot show the room the suit will be used in, the stream itself does after one frame;
-//! 4. keeps the connected region that carries the most suit cloth next to markers, fills its small holes
-//!    ([`cleanup`](super::cleanup)), and reports what that changed; then attaches the head, hands and
-//!    shoes: pixels of a band around the suit ([`SegmenterOptions::part_reach`]) connected to it whose
-//!    colour is likelier under the learned part table than under the (online) background;
+//! 4. keeps the connected region that carries the most suit cloth next to markers, with the pieces of
+//!    suit near it that an arm or an object in front cut off ([`SegmenterOptions::piece_reach`]), fills
+//!    small holes ([`cleanup`](super::cleanup)), and reports what that changed; then attaches the
+//!    head, hands and shoes: pixels of a band around the suit ([`SegmenterOptions::part_reach`])
+//!    connected to it whose colour is likelier under the learned part table than under the (online)
+//!    background, in pieces no larger than a head ([`SegmenterOptions::part_max_share`]);
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut.
 //!
@@ -59,6 +61,12 @@ pub struct SegmenterOptions {
     /// How far the head, hands and shoes are looked for around the suit, as a share of the suit
     /// region's height (0: the mask is the suit only).
     pub part_reach: f32,
+    /// How near the main region, as a share of its height, another piece of the suit is kept (see
+    /// [`keep_person_region`](super::cleanup::keep_person_region); 0: the main region only).
+    pub piece_reach: f32,
+    /// The largest piece attached as a part (head, hand, shoe), as a share of the suit's area: a
+    /// head is about 6 % of it.
+    pub part_max_share: f32,
 }
 
 impl Default for SegmenterOptions {
@@ -72,6 +80,8 @@ impl Default for SegmenterOptions {
             adapt_margin: 4,
             adapt_share: 0.7,
             part_reach: PART_REACH,
+            piece_reach: PART_REACH,
+            part_max_share: 0.1,
         }
     }
 }
@@ -150,11 +160,13 @@ fn marginal_nll(joint: &[f32]) -> Vec<f32> {
 }
 
 /// The tables of the unary terms, each multiplied by its weight σ once, so that a pixel's energy is
-/// a sum of lookups: colour × pattern (C), gradient (G), motion (M), the second-order temporal
+/// a sum of lookups: the suit's colour × pattern (C), gradient (G), motion (M), the second-order temporal
 /// prior (T) and the label prior used when there is no history.
 #[derive(Clone, Debug)]
 struct UnaryTables {
-    colour: [Vec<f32>; 2],
+    /// The suit's colour × pattern table; the background's is mixed with the room's colours each
+    /// frame (`Segmenter::background_colour`).
+    suit_colour: Vec<f32>,
     gradient: [Vec<f32>; 2],
     motion: [Vec<f32>; 4],
     temporal: [f32; 8],
@@ -166,7 +178,7 @@ impl UnaryTables {
         let s = t.weights;
         let scaled = |table: &[f32], sigma: f32| table.iter().map(|v| sigma * v).collect();
         UnaryTables {
-            colour: [0, 1].map(|l| scaled(&t.colour[l], s.colour)),
+            suit_colour: scaled(&t.colour[1], s.colour),
             gradient: [0, 1].map(|l| scaled(&t.gradient[l], s.gradient)),
             motion: [0, 1, 2, 3].map(|k| scaled(&t.motion[k], s.motion)),
             temporal: t.temporal.map(|v| s.temporal * v),
@@ -332,12 +344,19 @@ impl Segmenter {
         let f = &self.features;
         let history = self.previous.as_ref().zip(self.previous_mask.as_ref());
         let before_previous = self.before_previous_mask.as_deref();
+        let sigma_c = self.tables.weights.colour;
+        let background_colour = &self.background_colour;
         let (source, sink, right, down) = self.graph.parts_mut();
         for i in 0..w * h {
             let c = f.colour[i];
             let colour = colour_index(c, f.pattern[i]);
             let gradient = f.gradient[i] as usize;
-            let mut e = [0, 1].map(|l| u.colour[l][colour] + u.gradient[l][gradient]);
+            // The background's colour is the trained table mixed with the room's colours learned
+            // online (see `adapt_background`); the suit's is the trained table.
+            let mut e = [
+                sigma_c * background_colour[colour] + u.gradient[0][gradient],
+                u.suit_colour[colour] + u.gradient[1][gradient],
+            ];
             match history {
                 Some((prev, prev_mask)) => {
                     let dt = c.val.abs_diff(prev.colour[i].val) as u32;
@@ -481,7 +500,7 @@ impl Segmenter {
             &mut labels,
             w,
             h,
-            Some((&score, min_area)),
+            Some((&score, min_area, self.options.piece_reach)),
             max_hole,
             &mut crop,
             &mut ids,
@@ -511,6 +530,7 @@ impl Segmenter {
                 let bin = colours[i].bin as usize;
                 sigma * part_nll[bin] + prior[1] < sigma * bg[bin] + prior[0]
             },
+            (self.options.part_max_share * labels.iter().filter(|&&l| l).count() as f32) as usize,
             &mut self.part,
             &mut self.stack,
         );
