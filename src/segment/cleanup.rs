@@ -55,27 +55,45 @@ pub fn components(
     stats
 }
 
-/// Keeps the foreground component with the highest total `score` (ties: the larger) if it has at least
-/// `min_area` pixels, and with it the other components of at least a quarter of `min_area` whose
-/// score per pixel is at least half of its own and that come within `reach` × its height of it
-/// (0: none). The person is one region unless something in front of them — their own hand on
-/// the hip, a passing object — cuts the suit in two; the pieces are then as suit-like as the main
-/// one and near it, while a leak into the room is neither. Everything else is cleared; with no
+/// How [`keep_person_region`] picks the person among the foreground components.
+pub struct RegionRule<'a> {
+    /// Per pixel: how much it looks like the person (e.g. suit cloth next to a marker).
+    pub score: &'a dyn Fn(usize) -> f32,
+    /// Per pixel: does it have a marker's colour?
+    pub marker: &'a dyn Fn(usize) -> bool,
+    /// The main region has at least this many pixels.
+    pub min_area: usize,
+    /// Pieces are kept within this share of the main region's height of it (0: none).
+    pub reach: f32,
+}
+
+/// Keeps the foreground component with the highest total `score` (ties: the larger) if it has at
+/// least `min_area` pixels, and with it the other components of at least a quarter of `min_area`
+/// whose score per pixel and share of marker pixels are at least half of its own and that come
+/// within `reach` × its height of it. The person is one region unless something in front of them
+/// — their own hand on the hip, a passing object — cuts the suit in two; the pieces are then as
+/// suit-like as the main one, markers included, and near it, while a leak into a suit-coloured
+/// part of the room is cloth colour without markers. Everything else is cleared; with no
 /// component that large the mask becomes empty.
 pub fn keep_person_region(
     labels: &mut [bool],
     width: usize,
     height: usize,
-    score: impl Fn(usize) -> f32,
-    min_area: usize,
-    reach: f32,
+    rule: &RegionRule,
     ids: &mut Vec<u32>,
 ) -> CleanupReport {
+    let RegionRule {
+        score,
+        marker,
+        min_area,
+        reach,
+    } = *rule;
     let stats = components(labels, width, height, true, ids);
-    let mut scores = vec![0.0f32; stats.len()];
+    let (mut scores, mut markers) = (vec![0.0f32; stats.len()], vec![0usize; stats.len()]);
     for (i, &id) in ids.iter().enumerate() {
         if id != u32::MAX {
             scores[id as usize] += score(i);
+            markers[id as usize] += marker(i) as usize;
         }
     }
     let best = (0..stats.len())
@@ -91,8 +109,13 @@ pub fn keep_person_region(
         let main: Vec<bool> = ids.iter().map(|&id| id == best as u32).collect();
         let pixels = (reach * region_height(&main, width) as f32).ceil() as usize;
         let density = |c: usize| scores[c] / stats[c].0 as f32;
-        let candidate =
-            |c: usize| c != best && 4 * stats[c].0 >= min_area && density(c) >= 0.5 * density(best);
+        let marker_share = |c: usize| markers[c] as f32 / stats[c].0 as f32;
+        let candidate = |c: usize| {
+            c != best
+                && 4 * stats[c].0 >= min_area
+                && density(c) >= 0.5 * density(best)
+                && marker_share(c) >= 0.5 * marker_share(best)
+        };
         let mut distance = Vec::new();
         if pixels > 0 && (0..stats.len()).any(candidate) {
             if let Some(b) = distance_near(&main, width, height, pixels, &mut distance) {
@@ -218,17 +241,16 @@ impl PixelBox {
     }
 }
 
-/// [`keep_person_region`] (when `score`, `min_area` and `reach` are given) then [`fill_holes`], computed on the box around the
+/// [`keep_person_region`] (when a `rule` is given) then [`fill_holes`], computed on the box around the
 /// foreground grown by one pixel and clipped to the grid: the same result as on the whole grid, in
 /// time that grows with the person rather than the frame. Every foreground component lies inside
 /// the box; the box's edge is background, and a background component that touches it is joined to
 /// the region around the person, which reaches the image border, so it is not a hole.
-#[allow(clippy::too_many_arguments)]
 pub fn clean(
     labels: &mut [bool],
     width: usize,
     height: usize,
-    score: Option<(&dyn Fn(usize) -> f32, usize, f32)>,
+    rule: Option<&RegionRule>,
     max_hole: usize,
     crop: &mut Vec<bool>,
     ids: &mut Vec<u32>,
@@ -238,16 +260,17 @@ pub fn clean(
     };
     b.crop(labels, width, crop);
     let (bw, bh) = (b.width(), b.height());
-    let mut report = match score {
-        Some((score, min_area, reach)) => keep_person_region(
-            crop,
-            bw,
-            bh,
-            |i| score(b.grid_index(i, width)),
-            min_area,
-            reach,
-            ids,
-        ),
+    let mut report = match rule {
+        Some(rule) => {
+            let score = |i: usize| (rule.score)(b.grid_index(i, width));
+            let marker = |i: usize| (rule.marker)(b.grid_index(i, width));
+            let in_box = RegionRule {
+                score: &score,
+                marker: &marker,
+                ..*rule
+            };
+            keep_person_region(crop, bw, bh, &in_box, ids)
+        }
         None => CleanupReport::default(),
     };
     fill_holes(crop, bw, bh, max_hole, ids, &mut report);
@@ -324,11 +347,23 @@ pub fn part_band(
     }
 }
 
+/// What an attached part (head, hand, shoe) may look like, in pixels of the grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PartLimits {
+    /// The largest part.
+    pub max_area: usize,
+    /// The least area per pixel of contact with the suit: a head, a hand or a shoe joins the suit
+    /// through a narrow neck, wrist or ankle, while background of a part's colour that the flood
+    /// ran into lies along the suit in a thin strip.
+    pub min_depth: f32,
+}
+
 /// Adds to the person the band pixels (see [`part_band`]) that look like a part of the person
 /// (`part_like`) and are 4-connected to the suit through such pixels; `person` starts as the suit
-/// and ends as suit + parts, `part` marks the added pixels. A connected piece of added pixels larger
-/// than `max_part` is not a head, a hand or a shoe but background of a part's colour that the flood
-/// ran into along the suit, and is taken back. Returns how many pixels were added.
+/// and ends as suit + parts, `part` marks the added pixels. A connected piece of added pixels
+/// outside the `limits` (larger, or too shallow for its contact with the suit) is not a head, a
+/// hand or a shoe but background of a part's colour, and is taken back. Returns how many pixels
+/// were added.
 #[allow(clippy::too_many_arguments)]
 pub fn attach_parts(
     person: &mut [bool],
@@ -336,7 +371,7 @@ pub fn attach_parts(
     width: usize,
     height: usize,
     part_like: impl Fn(usize) -> bool,
-    max_part: usize,
+    limits: PartLimits,
     part: &mut Vec<bool>,
     stack: &mut Vec<usize>,
 ) -> usize {
@@ -359,17 +394,31 @@ pub fn attach_parts(
     let (mut crop, mut ids) = (Vec::new(), Vec::new());
     b.crop(part, width, &mut crop);
     let stats = components(&crop, b.width(), b.height(), true, &mut ids);
+    // Pixels of each piece that touch the suit.
+    let mut contact = vec![0usize; stats.len()];
+    for (k, &id) in ids.iter().enumerate() {
+        if id != u32::MAX {
+            let i = b.grid_index(k, width);
+            let mut touches = false;
+            for_each_neighbour(i, width, height, |j| touches |= person[j] && !part[j]);
+            contact[id as usize] += touches as usize;
+        }
+    }
+    let fits = |c: usize| {
+        let area = stats[c].0;
+        area <= limits.max_area && area as f32 >= limits.min_depth * contact[c] as f32
+    };
     let mut added = 0;
     for (k, &id) in ids.iter().enumerate() {
         if id == u32::MAX {
             continue;
         }
-        if stats[id as usize].0 > max_part {
+        if fits(id as usize) {
+            added += 1;
+        } else {
             let i = b.grid_index(k, width);
             person[i] = false;
             part[i] = false;
-        } else {
-            added += 1;
         }
     }
     added
@@ -396,6 +445,16 @@ fn for_each_neighbour(i: usize, width: usize, height: usize, mut visit: impl FnM
 mod tests {
     use super::*;
 
+    /// A rule with no marker pixels anywhere (so every piece passes the marker test).
+    fn rule<'a>(score: &'a dyn Fn(usize) -> f32, min_area: usize, reach: f32) -> RegionRule<'a> {
+        RegionRule {
+            score,
+            marker: &|_| false,
+            min_area,
+            reach,
+        }
+    }
+
     fn grid(rows: &[&str]) -> (Vec<bool>, usize, usize) {
         let w = rows[0].len();
         (
@@ -412,7 +471,7 @@ mod tests {
         let (mut m, w, h) = grid(&["##...", "##..#", ".....", "...##"]);
         let mut ids = Vec::new();
         // Equal scores: the larger (the 2×2 block) wins.
-        let report = keep_person_region(&mut m, w, h, |_| 1.0, 1, 0.0, &mut ids);
+        let report = keep_person_region(&mut m, w, h, &rule(&|_| 1.0, 1, 0.0), &mut ids);
         assert_eq!(m, grid(&["##...", "##...", ".....", "....."]).0);
         assert_eq!(
             report,
@@ -428,9 +487,7 @@ mod tests {
             &mut m,
             w,
             h,
-            |i| if i >= 18 { 10.0 } else { 1.0 },
-            1,
-            0.0,
+            &rule(&|i| if i >= 18 { 10.0 } else { 1.0 }, 1, 0.0),
             &mut ids,
         );
         assert_eq!(m, grid(&[".....", ".....", ".....", "...##"]).0);
@@ -438,22 +495,24 @@ mod tests {
 
     #[test]
     fn suit_like_pieces_near_the_person_are_kept() {
-        // A 4-row body cut at row 4 (a hand on the hip), a near piece below it, a far one at the
-        // bottom right, and a sparse one (score 0.1 per pixel) beside it.
+        // A 4-row body (markers in column 0) cut at row 4 (a hand on the hip); below it a piece
+        // with markers, beside that one a piece of cloth colour alone, far off a third piece.
         let (mut m, w, h) = grid(&[
-            "##......", "##......", "##......", "##......", "........", "##....##", "##....##",
+            "##......", "##......", "##......", "##......", "........", "##.##...", "##.##...",
             "........", "........", "......##",
         ]);
-        let score = |i: usize| {
-            if (5 * 8..7 * 8).contains(&i) && i % 8 >= 6 {
-                0.1
-            } else {
-                1.0
-            }
+        let marker = |i: usize| i % w == 0 || i % w == 6;
+        let score = |_: usize| 1.0;
+        let rule = RegionRule {
+            score: &score,
+            marker: &marker,
+            min_area: 4,
+            // 0.75 × 4 rows = 3 pixels (chamfer 9): both pieces below are within reach
+            // (chamfer 6 and 8), the far one is not.
+            reach: 0.75,
         };
         let mut ids = Vec::new();
-        // Reach 0.5 × 4 rows = 2 pixels: the piece below (1 row away) is kept, the others are not.
-        let report = keep_person_region(&mut m, w, h, score, 4, 0.5, &mut ids);
+        let report = keep_person_region(&mut m, w, h, &rule, &mut ids);
         assert_eq!(
             m,
             grid(&[
@@ -469,7 +528,7 @@ mod tests {
     fn too_small_a_region_leaves_an_empty_mask() {
         let (mut m, w, h) = grid(&["#....", ".....", "....#"]);
         let mut ids = Vec::new();
-        keep_person_region(&mut m, w, h, |_| 1.0, 2, 0.0, &mut ids);
+        keep_person_region(&mut m, w, h, &rule(&|_| 1.0, 2, 0.0), &mut ids);
         assert!(m.iter().all(|&p| !p));
     }
 
@@ -492,7 +551,20 @@ mod tests {
         let like = |i: usize| i / w == 1 || i == 5 * w + 6;
         let mut person = suit.clone();
         let (mut part, mut stack) = (Vec::new(), Vec::new());
-        let added = attach_parts(&mut person, &band, w, h, like, 3, &mut part, &mut stack);
+        let limits = |max_area| PartLimits {
+            max_area,
+            min_depth: 0.0,
+        };
+        let added = attach_parts(
+            &mut person,
+            &band,
+            w,
+            h,
+            like,
+            limits(3),
+            &mut part,
+            &mut stack,
+        );
         assert_eq!(added, 3);
         assert_eq!(
             &person[w..2 * w],
@@ -501,9 +573,28 @@ mod tests {
         assert!(part[w] && part[w + 3] && part[w + 4] && !part[w + 1] && !part[5 * w + 6]);
         // A cap of 1 pixel per piece takes the 2-pixel piece at x = 3..=4 back.
         let mut person = suit.clone();
-        let added = attach_parts(&mut person, &band, w, h, like, 1, &mut part, &mut stack);
+        let added = attach_parts(
+            &mut person,
+            &band,
+            w,
+            h,
+            like,
+            limits(1),
+            &mut part,
+            &mut stack,
+        );
         assert_eq!(added, 1);
         assert!(person[w] && !person[w + 3] && !person[w + 4] && !part[w + 3]);
+        // Depth: the pixel at x = 0 touches the suit with its 1 pixel (depth 1), the piece at
+        // x = 3..=4 with 1 of its 2 (depth 2); a least depth of 1.5 keeps the second only.
+        let mut person = suit.clone();
+        let deep = PartLimits {
+            max_area: 10,
+            min_depth: 1.5,
+        };
+        let added = attach_parts(&mut person, &band, w, h, like, deep, &mut part, &mut stack);
+        assert_eq!(added, 2);
+        assert!(!person[w] && person[w + 3] && person[w + 4]);
     }
 
     #[test]
@@ -562,10 +653,12 @@ mod tests {
             let score = |i: usize| (i % 7) as f32;
             let mut ids = Vec::new();
             let mut whole = labels.to_vec();
-            let mut expected = keep_person_region(&mut whole, width, height, score, min_area, reach, &mut ids);
+            let marker = |i: usize| i % 3 == 0;
+            let rule = RegionRule { score: &score, marker: &marker, min_area, reach };
+            let mut expected = keep_person_region(&mut whole, width, height, &rule, &mut ids);
             fill_holes(&mut whole, width, height, max_hole, &mut ids, &mut expected);
             let mut boxed = labels.to_vec();
-            let report = clean(&mut boxed, width, height, Some((&score, min_area, reach)), max_hole, &mut Vec::new(), &mut ids);
+            let report = clean(&mut boxed, width, height, Some(&rule), max_hole, &mut Vec::new(), &mut ids);
             proptest::prop_assert_eq!(&boxed, &whole);
             // The box leaves out background outside it, which is never a hole or removed region.
             proptest::prop_assert_eq!(report, expected);

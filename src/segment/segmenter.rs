@@ -19,7 +19,8 @@
 //!    small holes ([`cleanup`](super::cleanup)), and reports what that changed; then attaches the
 //!    head, hands and shoes: pixels of a band around the suit ([`SegmenterOptions::part_reach`])
 //!    connected to it whose colour is likelier under the learned part table than under the (online)
-//!    background, in pieces no larger than a head ([`SegmenterOptions::part_max_share`]);
+//!    background, in pieces shaped like a head, a hand or a shoe ([`SegmenterOptions::part_max_share`],
+//!    [`SegmenterOptions::part_min_depth`]);
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut.
 //!
@@ -30,7 +31,8 @@ use std::time::Instant;
 use image::RgbImage;
 
 use super::cleanup::{
-    attach_parts, clean, distance_near, part_band, CleanupReport, PixelBox, PART_REACH,
+    attach_parts, clean, distance_near, part_band, region_height, CleanupReport, PartLimits,
+    PixelBox, RegionRule, PART_REACH,
 };
 use super::features::{
     colour_index, contrast_bin, downscale, is_suit_pattern, temporal_bin, ColourLut, FrameFeatures,
@@ -67,6 +69,10 @@ pub struct SegmenterOptions {
     /// The largest piece attached as a part (head, hand, shoe), as a share of the suit's area: a
     /// head is about 6 % of it.
     pub part_max_share: f32,
+    /// The least area of an attached part per pixel of its contact with the suit, as a share of
+    /// the suit's height: a hand is about 0.06 of it deep, a strip of background along an arm a
+    /// pixel or two.
+    pub part_min_depth: f32,
 }
 
 impl Default for SegmenterOptions {
@@ -82,6 +88,7 @@ impl Default for SegmenterOptions {
             part_reach: PART_REACH,
             piece_reach: PART_REACH,
             part_max_share: 0.1,
+            part_min_depth: 0.03,
         }
     }
 }
@@ -495,12 +502,18 @@ impl Segmenter {
                 0.01
             }
         };
-        let min_area = (self.options.min_person_fraction * n).ceil() as usize;
+        let marker = |i: usize| self.gate.is_marker(colours[i]);
+        let rule = RegionRule {
+            score: &score,
+            marker: &marker,
+            min_area: (self.options.min_person_fraction * n).ceil() as usize,
+            reach: self.options.piece_reach,
+        };
         let mut report = clean(
             &mut labels,
             w,
             h,
-            Some((&score, min_area, self.options.piece_reach)),
+            Some(&rule),
             max_hole,
             &mut crop,
             &mut ids,
@@ -530,7 +543,12 @@ impl Segmenter {
                 let bin = colours[i].bin as usize;
                 sigma * part_nll[bin] + prior[1] < sigma * bg[bin] + prior[0]
             },
-            (self.options.part_max_share * labels.iter().filter(|&&l| l).count() as f32) as usize,
+            PartLimits {
+                max_area: (self.options.part_max_share
+                    * labels.iter().filter(|&&l| l).count() as f32)
+                    as usize,
+                min_depth: self.options.part_min_depth * region_height(&labels, w) as f32,
+            },
             &mut self.part,
             &mut self.stack,
         );
