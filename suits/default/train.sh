@@ -4,8 +4,9 @@
 # 1. renders one synthetic dataset per clip (640x480, 30 fps, subjects and backgrounds from fixed seeds,
 #    bundled backgrounds in tests/data/backgrounds) into WORK_DIR (default: a temporary directory);
 #    21 clips, about 5,500 frames, about 2.5 minutes on a 2-core machine;
-# 2. suitcap-train suit: segmenter tables (20 frames of the first dataset), codebooks, RVM regressor,
-#    written into suits/default/;
+# 2. suitcap-train suit: segmenter tables (20 frames of the first dataset), codebooks, RVM regressor
+#    (its training descriptors computed with the new segmenter's masks, as at run time), written into
+#    suits/default/;
 # 3. suitcap-train limits: joint limits (joint_limits.toml) from the same clips.
 set -euo pipefail
 cd "$(dirname "$0")/../.."

@@ -82,6 +82,11 @@ enum Command {
         width: Option<f32>,
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Masks the regressor's training descriptors are computed with: `segmenter` (default: the
+        /// suit's own segmenter run over each dataset as a stream, i.e. the masks it will see at run
+        /// time, head, hands and leaks included) or `truth` (the datasets' masks).
+        #[arg(long, default_value = "segmenter")]
+        masks: String,
     },
     /// Learn the joint limits (per rotation channel, the range the training motions cover plus a
     /// margin) from mocap-aligned datasets or BVH clips; writes SUIT/joint_limits.toml.
@@ -276,25 +281,49 @@ fn codebooks(
     Ok(())
 }
 
-/// Descriptors and pose vectors of every frame with a person in a dataset (ground-truth masks).
+/// Descriptors and pose vectors of every frame with a person in a dataset, with its ground-truth
+/// masks or, given the `segmenter`'s tables, with the masks the segmenter finds when it runs over
+/// the dataset's frames as one stream.
 fn training_set(
     dataset: &Dataset,
     suit: &SuitDefinition,
     codebooks: &suitcap::descriptor::Codebooks,
     kind: suitcap::descriptor::DescriptorKind,
+    segmenter: Option<&suitcap::segment::SegmenterTables>,
 ) -> anyhow::Result<(Vec<f32>, Vec<f32>, usize)> {
     use rayon::prelude::*;
     use suitcap::descriptor::Describer;
     use suitcap::pose::PoseLayout;
     let layout = PoseLayout::new(&suit.skeleton, &dataset.motion.skeleton)
         .with_context(|| format!("{}: motion.bvh", dataset.root.display()))?;
+    let segmented: Option<Vec<Mask>> = match segmenter {
+        Some(tables) => {
+            let mut segmenter = suitcap::segment::Segmenter::new(
+                tables.clone(),
+                suit,
+                suitcap::segment::SegmenterOptions::default(),
+            );
+            let masks = (0..dataset.frame_count())
+                .map(|index| {
+                    let (image, _) = frame_and_mask(dataset, index)?;
+                    Ok(segmenter.segment(&image).mask)
+                })
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            Some(masks)
+        }
+        None => None,
+    };
     let rows = (0..dataset.frame_count())
         .into_par_iter()
         .map_init(
             || Describer::new(suit),
             |describer, index| -> anyhow::Result<Option<(Vec<f32>, Vec<f32>)>> {
-                let (image, mask) = frame_and_mask(dataset, index)?;
-                let (d, _) = describer.describe(&image, &mask, kind, codebooks);
+                let (image, truth) = frame_and_mask(dataset, index)?;
+                let mask = match &segmented {
+                    Some(masks) => &masks[index],
+                    None => &truth,
+                };
+                let (d, _) = describer.describe(&image, mask, kind, codebooks);
                 let Some((x0, y0, x1, y1)) = mask.bounding_box().filter(|_| d.person) else {
                     return Ok(None);
                 };
@@ -354,6 +383,7 @@ impl TrainingData {
         codebooks: &suitcap::descriptor::Codebooks,
         data: &[PathBuf],
         kind: suitcap::descriptor::DescriptorKind,
+        segmenter: Option<&suitcap::segment::SegmenterTables>,
     ) -> anyhow::Result<TrainingData> {
         let dim = kind.len();
         let mut set = TrainingData {
@@ -366,7 +396,7 @@ impl TrainingData {
         };
         for dir in data {
             let dataset = Dataset::open(dir)?;
-            let (x, y, n) = training_set(&dataset, suit, codebooks, kind)?;
+            let (x, y, n) = training_set(&dataset, suit, codebooks, kind, segmenter)?;
             if n == 0 {
                 continue;
             }
@@ -463,9 +493,15 @@ fn train_suit(
     descriptor: &str,
     width: Option<f32>,
     seed: u64,
+    masks: &str,
 ) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap::pose::regressor::Regressor;
+    let use_segmenter = match masks {
+        "segmenter" => true,
+        "truth" => false,
+        other => bail!("--masks '{other}': expected segmenter or truth"),
+    };
     let started = std::time::Instant::now();
     let mut kind = DescriptorKind::parse(descriptor)
         .with_context(|| format!("--descriptor '{descriptor}'"))?;
@@ -498,8 +534,21 @@ fn train_suit(
             Codebooks::load(suit_dir)?
         }
     };
-    println!("stage 3/3: RVM regressor on the {} descriptor", kind.name());
-    let set = TrainingData::collect(&suit, &codebooks, data, kind)?;
+    println!(
+        "stage 3/3: RVM regressor on the {} descriptor, {} masks",
+        kind.name(),
+        if use_segmenter {
+            "segmenter"
+        } else {
+            "ground-truth"
+        }
+    );
+    let tables = if use_segmenter {
+        Some(suitcap::segment::SegmenterTables::load(suit_dir)?)
+    } else {
+        None
+    };
+    let set = TrainingData::collect(&suit, &codebooks, data, kind, tables.as_ref())?;
     let total = set.frames();
     let width = match width {
         Some(w) => w,
@@ -837,7 +886,7 @@ fn experiments(
         DescriptorKind::Silhouette,
     ] {
         println!("{}:", kind.name());
-        let set = TrainingData::collect(&suit, &codebooks, train, kind)?;
+        let set = TrainingData::collect(&suit, &codebooks, train, kind, None)?;
         let width = set.choose_width(512, seed)?;
         for &basis in bases {
             let (rvm, report) = set.fit(basis, width, seed)?;
@@ -937,7 +986,8 @@ fn main() -> ExitCode {
             descriptor,
             width,
             seed,
-        } => train_suit(suit, data, *basis, descriptor, *width, *seed),
+            masks,
+        } => train_suit(suit, data, *basis, descriptor, *width, *seed, masks),
         Command::Experiments {
             suit,
             train,
