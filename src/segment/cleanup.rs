@@ -1,13 +1,17 @@
-//! Clean-up of the cut: keep one person region and fill its small holes.
+//! Clean-up of the cut: keep the person's region, fill its small holes, attach head, hands and shoes.
 //!
 //! The min-cut labels every pixel independently of any notion of "one person", so stray foreground
 //! (a suit-coloured object in the room) and small background holes (a shadowed fold) remain.
 //! [`keep_person_region`] labels the 4-connected foreground components, keeps the one with the highest
 //! score (the caller scores pixels, e.g. suit cloth next to a marker, so that a large flat green poster
-//! does not beat a smaller person) if it is big enough, and removes the rest; [`fill_holes`] fills background
-//! components that do not touch the image border and are smaller than a limit. Both report what they
-//! changed, which the segmenter passes on in its output. [`clean`] runs both on the box around the
-//! foreground only ([`PixelBox`]), with the same result as on the whole grid.
+//! does not beat a smaller person) if it is big enough, with the pieces of suit near it that something
+//! in front cut off ([`RegionRule`]), and removes the rest; [`fill_holes`] fills background components
+//! that do not touch the image border and are smaller than a limit. Both report what they changed,
+//! which the segmenter passes on in its output. [`clean`] runs both on the box around the foreground
+//! only ([`PixelBox`]), with the same result as on the whole grid. [`attach_parts`] then grows the
+//! suit into a band around it ([`part_band`]) through pixels of a part's colour, in pieces shaped like
+//! a head, a hand or a shoe ([`PartLimits`]). The person mask goes to the refinement at full
+//! resolution.
 
 /// What the clean-up changed in one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
