@@ -306,7 +306,7 @@ impl RunOutputs {
 
 fn status_name(status: &ClothStatus) -> &'static str {
     match status {
-        ClothStatus::Worn => "worn",
+        ClothStatus::Worn { .. } => "worn",
         ClothStatus::Sizing { .. } => "measuring",
         ClothStatus::NoPerson => "hidden",
         ClothStatus::Off => "off",
@@ -386,6 +386,8 @@ pub fn run(
     );
     let mut timings = TimingLog::default();
     let (mut nobody, mut failure) = (0usize, None::<anyhow::Error>);
+    let template = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
+    let mut body_size = None;
     let input_owned = input.to_owned();
     let summary = runner::run(
         move || {
@@ -401,6 +403,9 @@ pub fn run(
         |output| {
             nobody += (!output.pose.person) as usize;
             timings.push(output.times);
+            if let ClothStatus::Worn { size } = output.cloth.status {
+                body_size.get_or_insert(size);
+            }
             if let Some(e) = &output.cloth_error {
                 bar.println(format!("frame {}: garment: {e}", output.index));
             }
@@ -421,6 +426,15 @@ pub fn run(
     let bvh = take.write()?;
     outputs.finish(out)?;
     report(&summary, take.frames(), nobody, bvh, &timings);
+    if let Some(size) = body_size {
+        println!(
+            "body size measured on the silhouettes of {} frames: {:.0} cm tall ({:.3} × the suit's skeleton), girth {:.2} (1 = the base figure's build); the garment is cut for it",
+            size.frames,
+            size.height_cm(&template),
+            size.height_scale,
+            size.girth
+        );
+    }
     println!(
         "composited frames: {}/frames/  preview: {}/preview.gif  per-frame table: {}/frames.csv",
         out.display(),

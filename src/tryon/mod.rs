@@ -155,8 +155,8 @@ pub enum TryOnError {
 pub enum ClothStatus {
     /// Measuring the person: `seen` of `needed` frames.
     Sizing { seen: usize, needed: usize },
-    /// Simulated and shown.
-    Worn,
+    /// Simulated and shown, on a body of the measured `size`.
+    Worn { size: BodySize },
     /// Nobody in view: hidden.
     NoPerson,
     /// No garment was asked for.
@@ -316,7 +316,7 @@ impl ClothStage {
         };
         let cloth = &simulation.cloth;
         Ok(ClothFrame {
-            status: ClothStatus::Worn,
+            status: ClothStatus::Worn { size },
             positions: cloth.positions().iter().map(|&p| Vec3::from(p)).collect(),
             triangles: Arc::clone(&simulation.triangles),
             capsules: cloth.pose().capsules.clone(),
@@ -437,7 +437,7 @@ impl RenderStage {
         banner: &[String],
     ) -> Result<(f64, f64), CompositeError> {
         let started = Instant::now();
-        let worn = cloth.status == ClothStatus::Worn && !cloth.positions.is_empty();
+        let worn = matches!(cloth.status, ClothStatus::Worn { .. }) && !cloth.positions.is_empty();
         if worn {
             self.renderer
                 .render(camera, &cloth.positions, &cloth.triangles, &cloth.capsules);
