@@ -416,8 +416,8 @@ fn segment(
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let (mut frames, mut skipped) = (0usize, Vec::new());
     let mut times = Vec::new();
-    let mut ious: Vec<(f64, String)> = Vec::new();
-    let mut agreements = Vec::new();
+    // Per frame scored against the truth: how the mask agrees with it, and the frame's name.
+    let mut scored: Vec<(suitcap::mask::Agreement, String)> = Vec::new();
     let (mut cleaned_frames, mut removed_px, mut filled_px, mut empty_frames) =
         (0usize, 0usize, 0usize, 0usize);
     loop {
@@ -458,9 +458,7 @@ fn segment(
             let gt = image::open(&truth_path)
                 .with_context(|| format!("cannot read {}", truth_path.display()))?
                 .to_luma8();
-            let agreement = result.mask.agreement(&Mask::from_gray(&gt));
-            ious.push((agreement.iou(), name.clone()));
-            agreements.push(agreement);
+            scored.push((result.mask.agreement(&Mask::from_gray(&gt)), name.clone()));
         }
         frames += 1;
     }
@@ -486,24 +484,25 @@ fn segment(
             median(&|t| t.total())
         );
     }
-    if !ious.is_empty() {
-        let mean = ious.iter().map(|(v, _)| v).sum::<f64>() / ious.len() as f64;
-        let worst = ious
+    if !scored.is_empty() {
+        let n = scored.len() as f64;
+        let mean = scored.iter().map(|(a, _)| a.iou()).sum::<f64>() / n;
+        let worst = scored
             .iter()
+            .map(|(a, name)| (a.iou(), name.clone()))
             .min_by(|a, b| a.0.total_cmp(&b.0))
-            .map(|(v, n)| (*v, n.clone()))
             .unwrap_or_default();
-        let shares: Vec<(f64, f64)> = agreements.iter().map(|a| a.missed_and_extra()).collect();
-        let (missed, extra) = shares
-            .iter()
-            .fold((0.0, 0.0), |(m, e), &(a, b)| (m + a, e + b));
+        let (missed, extra) = scored.iter().fold((0.0, 0.0), |(m, e), (a, _)| {
+            let (am, ae) = a.missed_and_extra();
+            (m + am, e + ae)
+        });
         println!(
             "IoU against {}: mean {mean:.4}, worst {:.4} ({}); per frame on average {:.1} % of the person missed, {:.1} % of its area added",
             truth.map(|t| t.display().to_string()).unwrap_or_default(),
             worst.0,
             worst.1,
-            100.0 * missed / shares.len() as f64,
-            100.0 * extra / shares.len() as f64,
+            100.0 * missed / n,
+            100.0 * extra / n,
         );
     }
     Ok(())

@@ -348,6 +348,14 @@ pub fn chamfer(d: &mut [u16], w: usize, h: usize) {
 /// Pixels this close (at the cut's resolution) to a pixel of the suit's pattern can be the suit.
 pub const SUIT_RADIUS: u16 = 2;
 
+/// Is pixel `i` of `features` a pixel of the suit's pattern: of the cloth's or a marker's colour, and
+/// seeing the suit's mixed pattern around it (the seeds of [`suit_support`])?
+#[inline]
+pub fn is_pattern_seed(features: &FrameFeatures, gate: &MarkerGate, i: usize) -> bool {
+    let c = features.colour[i];
+    is_suit_pattern(features.pattern[i], 1) && (gate.is_cloth(c) || gate.is_marker(c))
+}
+
 /// Where the suit can be: pixels within [`SUIT_RADIUS`] of a pixel of the cloth's or a marker's
 /// colour that sees the suit's mixed pattern around it (see [`PATTERN_CLASSES`]; skin has a red
 /// marker's hue, but no mixed markers around it). With `within`, only its set pixels are seeds.
@@ -359,11 +367,8 @@ pub fn suit_support(
     out: &mut Vec<bool>,
 ) {
     distance.clear();
-    distance.extend(features.colour.iter().enumerate().map(|(i, &c)| {
-        let seed = within.is_none_or(|m| m[i])
-            && is_suit_pattern(features.pattern[i], 1)
-            && (gate.is_cloth(c) || gate.is_marker(c));
-        if seed {
+    distance.extend((0..features.colour.len()).map(|i| {
+        if within.is_none_or(|m| m[i]) && is_pattern_seed(features, gate, i) {
             0
         } else {
             FAR

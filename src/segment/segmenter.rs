@@ -35,8 +35,8 @@ use super::cleanup::{
     PixelBox, RegionRule, PART_REACH,
 };
 use super::features::{
-    colour_index, contrast_bin, downscale, is_suit_pattern, temporal_bin, ColourLut, FrameFeatures,
-    MarkerGate, COLOUR_BINS, PATTERN_CLASSES, TEMPORAL_BINS,
+    colour_index, contrast_bin, downscale, is_pattern_seed, is_suit_pattern, temporal_bin,
+    ColourLut, FrameFeatures, MarkerGate, COLOUR_BINS, PATTERN_CLASSES, TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
 use super::tables::SegmenterTables;
@@ -105,6 +105,17 @@ pub struct StageTimes {
     pub history: f64,
 }
 
+impl std::ops::AddAssign for StageTimes {
+    fn add_assign(&mut self, other: StageTimes) {
+        self.features += other.features;
+        self.graph += other.graph;
+        self.cut += other.cut;
+        self.cleanup += other.cleanup;
+        self.refine += other.refine;
+        self.history += other.history;
+    }
+}
+
 impl StageTimes {
     pub fn total(&self) -> f64 {
         self.features + self.graph + self.cut + self.cleanup + self.refine + self.history
@@ -148,6 +159,8 @@ pub struct Segmenter {
     background_pattern: [f32; PATTERN_CLASSES],
     /// Background colour NLL per colour bin (the pattern classes summed), trained and online mixed.
     background_bin: Vec<f32>,
+    /// Background colour NLL per colour bin of the trained table alone.
+    trained_background_bin: Vec<f32>,
     distance: Vec<u16>,
     band: Vec<bool>,
     part: Vec<bool>,
@@ -225,7 +238,8 @@ impl Segmenter {
                 .sum::<f32>()
         });
         let background_colour = tables.colour[0].clone();
-        let background_bin = marginal_nll(&tables.colour[0]);
+        let trained_background_bin = marginal_nll(&tables.colour[0]);
+        let background_bin = trained_background_bin.clone();
         let unary_tables = UnaryTables::new(&tables);
         Segmenter {
             tables,
@@ -247,6 +261,7 @@ impl Segmenter {
             background_colour,
             background_pattern,
             background_bin,
+            trained_background_bin,
             distance: Vec::new(),
             band: Vec::new(),
             part: Vec::new(),
@@ -265,7 +280,7 @@ impl Segmenter {
         self.before_previous_mask = None;
         self.online_background = None;
         self.background_colour.clone_from(&self.tables.colour[0]);
-        self.background_bin = marginal_nll(&self.tables.colour[0]);
+        self.background_bin.clone_from(&self.trained_background_bin);
     }
 
     /// Learns the background colours of this frame from pixels well away from the person and
@@ -320,7 +335,7 @@ impl Segmenter {
                 self.background_colour[k] = -(p.max(1e-6)).ln();
             }
         }
-        let trained = marginal_nll(&self.tables.colour[0]);
+        let trained = &self.trained_background_bin;
         for (bin, v) in self.background_bin.iter_mut().enumerate() {
             let p = (1.0 - share) * (-trained[bin]).exp() + share * online[bin];
             *v = -(p.max(1e-6)).ln();
@@ -413,13 +428,7 @@ impl Segmenter {
             self.previous_mask = None;
             self.before_previous_mask = None;
             let mut second = self.segment_once(frame);
-            let (a, b) = (first.times, &mut second.times);
-            b.features += a.features;
-            b.graph += a.graph;
-            b.cut += a.cut;
-            b.cleanup += a.cleanup;
-            b.refine += a.refine;
-            b.history += a.history;
+            second.times += first.times;
             return second;
         }
         self.segment_once(frame)
@@ -448,12 +457,7 @@ impl Segmenter {
         // `features::suit_support` on the cut's pixels only: a 3-4 chamfer distance of at most
         // 3 · SUIT_RADIUS = 6 is one of these 13 offsets.
         {
-            let (colours, pattern, gate) =
-                (&self.features.colour, &self.features.pattern, &self.gate);
-            let seed = |j: usize| {
-                is_suit_pattern(pattern[j], 1)
-                    && (gate.is_cloth(colours[j]) || gate.is_marker(colours[j]))
-            };
+            let seed = |j: usize| is_pattern_seed(&self.features, &self.gate, j);
             const NEAR: [(isize, isize); 13] = [
                 (0, 0),
                 (-1, 0),
@@ -593,10 +597,12 @@ impl Segmenter {
     fn refine(&self, frame: &RgbImage, labels: &[bool], w: usize, h: usize) -> Mask {
         let (fw, fh) = (frame.width(), frame.height());
         let f = self.tables.downscale.max(1) as f32;
+        // A cell with no corner in the box around the person grown by a pixel is background and
+        // not near an edge: the output there stays background (all of it without a person).
+        let Some(b) = PixelBox::around(labels, w, h, 1) else {
+            return Mask::empty(fw, fh);
+        };
         let mut out = vec![false; fw as usize * fh as usize];
-        if w == 0 || h == 0 {
-            return Mask::from_pixels(fw, fh, out).unwrap_or_else(|| Mask::empty(fw, fh));
-        }
         let sigma = self.tables.weights.colour;
         let prior = self.options.refine_prior;
         let raw = frame.as_raw();
@@ -605,7 +611,7 @@ impl Segmenter {
         // resolution, can be a pixel off, and that pixel is two at full resolution).
         let wide = self.options.refine_wide;
         let near = if wide {
-            mixed_3x3(labels, w, h)
+            mixed_3x3_in(labels, w, h, b)
         } else {
             Vec::new()
         };
@@ -623,11 +629,6 @@ impl Segmenter {
                 x + 1
             };
         }
-        // A cell with no corner in the box around the person grown by a pixel is background and
-        // not near an edge: the output there stays background.
-        let Some(b) = PixelBox::around(labels, w, h, 1) else {
-            return Mask::from_pixels(fw, fh, out).unwrap_or_else(|| Mask::empty(fw, fh));
-        };
         let touches = |c0: usize, start: usize, end: usize| c0 + 1 >= start && c0 < end;
         let first_x = columns
             .iter()
@@ -701,15 +702,21 @@ impl Segmenter {
     }
 }
 
-/// Per pixel of a `w`×`h` label grid: does its 3×3 neighbourhood (clipped at the border) hold both
-/// labels? Row-wise any/all over three columns, then over three rows.
+/// [`mixed_3x3_in`], finding the box itself.
+#[cfg(test)]
 fn mixed_3x3(labels: &[bool], w: usize, h: usize) -> Vec<bool> {
+    match PixelBox::around(labels, w, h, 1) {
+        Some(b) => mixed_3x3_in(labels, w, h, b),
+        None => vec![false; w * h],
+    }
+}
+
+/// Per pixel of a `w`×`h` label grid: does its 3×3 neighbourhood (clipped at the border) hold both
+/// labels? Row-wise any/all over three columns, then over three rows, inside `b`, the box around
+/// the set pixels grown by one: only pixels in it can be mixed, and windows clipped to it see the
+/// same labels (its edge is unset, and so is everything beyond).
+fn mixed_3x3_in(labels: &[bool], w: usize, h: usize, b: PixelBox) -> Vec<bool> {
     let mut mixed = vec![false; w * h];
-    // Only pixels in the box around the set ones grown by a pixel can be mixed; windows clipped
-    // to that box see the same labels (its edge is unset, and so is everything beyond).
-    let Some(b) = PixelBox::around(labels, w, h, 1) else {
-        return mixed;
-    };
     let (bw, bh) = (b.width(), b.height());
     let (mut any, mut all) = (vec![false; bw * bh], vec![false; bw * bh]);
     for y in 0..bh {

@@ -187,14 +187,24 @@ fn segment(
 
 /// Reads frame `index` and its mask from a dataset, naming the file on error.
 fn frame_and_mask(dataset: &Dataset, index: usize) -> anyhow::Result<(image::RgbImage, Mask)> {
-    let (frame_path, mask_path) = (dataset.frame_path(index), dataset.mask_path(index));
-    let image = image::open(&frame_path)
-        .with_context(|| format!("cannot read frame {index}: {}", frame_path.display()))?
-        .to_rgb8();
-    let mask = image::open(&mask_path)
-        .with_context(|| format!("cannot read mask {index}: {}", mask_path.display()))?
+    Ok((read_frame(dataset, index)?, read_mask(dataset, index)?))
+}
+
+/// Reads frame `index` of a dataset, naming the file on error.
+fn read_frame(dataset: &Dataset, index: usize) -> anyhow::Result<image::RgbImage> {
+    let path = dataset.frame_path(index);
+    Ok(image::open(&path)
+        .with_context(|| format!("cannot read frame {index}: {}", path.display()))?
+        .to_rgb8())
+}
+
+/// Reads the ground-truth mask of frame `index` of a dataset, naming the file on error.
+fn read_mask(dataset: &Dataset, index: usize) -> anyhow::Result<Mask> {
+    let path = dataset.mask_path(index);
+    let mask = image::open(&path)
+        .with_context(|| format!("cannot read mask {index}: {}", path.display()))?
         .to_luma8();
-    Ok((image, Mask::from_gray(&mask)))
+    Ok(Mask::from_gray(&mask))
 }
 
 fn codebooks(
@@ -304,10 +314,7 @@ fn training_set(
                 suitcap::segment::SegmenterOptions::default(),
             );
             let masks = (0..dataset.frame_count())
-                .map(|index| {
-                    let (image, _) = frame_and_mask(dataset, index)?;
-                    Ok(segmenter.segment(&image).mask)
-                })
+                .map(|index| Ok(segmenter.segment(&read_frame(dataset, index)?).mask))
                 .collect::<anyhow::Result<Vec<_>>>()?;
             Some(masks)
         }
@@ -318,10 +325,14 @@ fn training_set(
         .map_init(
             || Describer::new(suit),
             |describer, index| -> anyhow::Result<Option<(Vec<f32>, Vec<f32>)>> {
-                let (image, truth) = frame_and_mask(dataset, index)?;
+                let image = read_frame(dataset, index)?;
+                let truth;
                 let mask = match &segmented {
                     Some(masks) => &masks[index],
-                    None => &truth,
+                    None => {
+                        truth = read_mask(dataset, index)?;
+                        &truth
+                    }
                 };
                 let (d, _) = describer.describe(&image, mask, kind, codebooks);
                 let Some((x0, y0, x1, y1)) = mask.bounding_box().filter(|_| d.person) else {
