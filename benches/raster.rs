@@ -199,10 +199,13 @@ mod old {
         mut shade: impl FnMut(Fragment),
     ) {
         let [a, b, c] = vertices;
-        if [a, b, c]
-            .iter()
-            .any(|v| !(v.depth >= near) || !v.x.is_finite() || !v.y.is_finite())
-        {
+        if [a, b, c].iter().any(|v| {
+            v.depth.is_nan()
+                || near.is_nan()
+                || v.depth < near
+                || !v.x.is_finite()
+                || !v.y.is_finite()
+        }) {
             return;
         }
         let area = edge(a.x, a.y, b.x, b.y, c.x, c.y);

@@ -97,7 +97,7 @@ impl Motion {
     /// A motion from plain parts. `values` must hold whole frames of `skeleton.channel_count()` values.
     pub fn new(skeleton: Skeleton, frame_time: f64, values: Vec<f32>) -> Result<Motion, BvhError> {
         let channels = skeleton.channel_count();
-        if channels > 0 && values.len() % channels != 0 {
+        if channels > 0 && !values.len().is_multiple_of(channels) {
             return Err(BvhError::FrameLength {
                 frame: values.len() / channels,
                 got: values.len() % channels,
@@ -593,7 +593,7 @@ mod tests {
     fn resampling_120_to_30_takes_every_fourth_frame() {
         let skeleton = two_joint_arm();
         let values: Vec<f32> = (0..100)
-            .flat_map(|f| std::iter::repeat(f as f32).take(9))
+            .flat_map(|f| std::iter::repeat_n(f as f32, 9))
             .collect();
         let m = Motion::new(skeleton, 1.0 / 120.0, values).expect("motion");
         let (r, sources) = m.resample(10, Some(5), 30.0).expect("fits");

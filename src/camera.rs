@@ -209,7 +209,8 @@ impl Camera {
             .to_cols_array()
             .iter()
             .fold(0.0f32, |m, v| m.max(v.abs()));
-        if !(orthonormality < 1e-3) || rotation.determinant() <= 0.0 {
+        // NaN is not orthonormal either.
+        if orthonormality.is_nan() || orthonormality >= 1e-3 || rotation.determinant() <= 0.0 {
             return Err(field(
                 "extrinsics.rotation",
                 format!(
@@ -228,7 +229,9 @@ impl Camera {
             translation,
         };
         let position = Vec3::from_array(e.position);
-        if !(camera.position().distance(position) < 0.1) {
+        let disagreement = camera.position().distance(position);
+        // NaN disagrees too.
+        if disagreement.is_nan() || disagreement >= 0.1 {
             return Err(field(
                 "extrinsics.position",
                 format!("{position} disagrees with −Rᵀ·t = {}", camera.position()),

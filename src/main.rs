@@ -299,7 +299,7 @@ fn save_frame(image: &image::RgbImage, path: &Path, jpeg: Option<u8>) -> anyhow:
     Ok(())
 }
 
-fn check(suit: &PathBuf, data: Option<&PathBuf>) -> anyhow::Result<()> {
+fn check(suit: &Path, data: Option<&Path>) -> anyhow::Result<()> {
     let definition = SuitDefinition::load_dir(suit)?;
     println!(
         "suit '{}': {} marker colours, {} cm markers every {} cm, {} estimated joints",
@@ -553,10 +553,7 @@ fn describe(
     let mut skipped = Vec::new();
     let (mut frames, mut times, mut score, mut counts) =
         (0usize, Vec::new(), MarkerScore::default(), Vec::new());
-    loop {
-        let Some(frame) = next_good_frame(source.as_mut(), &mut skipped, frames) else {
-            break;
-        };
+    while let Some(frame) = next_good_frame(source.as_mut(), &mut skipped, frames) {
         let name = names
             .as_ref()
             .and_then(|n| n.get(frame.index as usize).cloned())
@@ -670,7 +667,7 @@ fn main() -> ExitCode {
             fps,
             jpeg,
         } => capture(input, out, *frames, *size, *fps, *jpeg),
-        Command::Check { suit, data } => check(suit, data.as_ref()),
+        Command::Check { suit, data } => check(suit, data.as_deref()),
         Command::Run {
             input,
             suit,

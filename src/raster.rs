@@ -335,10 +335,9 @@ pub fn draw_triangle(
     shade: impl FnMut(Fragment),
 ) {
     let [a, b, c] = vertices;
-    if [a, b, c]
-        .iter()
-        .any(|v| !(v.depth >= near) || !v.x.is_finite() || !v.y.is_finite())
-    {
+    if [a, b, c].iter().any(|v| {
+        v.depth.is_nan() || near.is_nan() || v.depth < near || !v.x.is_finite() || !v.y.is_finite()
+    }) {
         return;
     }
     let area = edge(a.x, a.y, b.x, b.y, c.x, c.y);
@@ -660,7 +659,7 @@ mod tests {
     fn nearer_triangle_wins_whatever_the_order() {
         for near_first in [true, false] {
             let mut buffer = DepthBuffer::new(4, 4);
-            let mut colour = vec![0u8; 16];
+            let mut colour = [0u8; 16];
             let big = |d: f32| [sv(-1.0, -1.0, d), sv(9.0, -1.0, d), sv(-1.0, 9.0, d)];
             let order = if near_first {
                 [(1, 2.0), (2, 5.0)]
@@ -803,10 +802,13 @@ mod tests {
             mut shade: impl FnMut(Fragment),
         ) {
             let [a, b, c] = vertices;
-            if [a, b, c]
-                .iter()
-                .any(|v| !(v.depth >= near) || !v.x.is_finite() || !v.y.is_finite())
-            {
+            if [a, b, c].iter().any(|v| {
+                v.depth.is_nan()
+                    || near.is_nan()
+                    || v.depth < near
+                    || !v.x.is_finite()
+                    || !v.y.is_finite()
+            }) {
                 return;
             }
             let area = edge(a.x, a.y, b.x, b.y, c.x, c.y);

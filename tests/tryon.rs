@@ -154,7 +154,7 @@ fn sigterm_finalises_the_take() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let data = generated_clip(&tmp.path().join("clip"), 40);
     let out = tmp.path().join("out");
-    let mut child = suitcap()
+    let child = suitcap()
         .arg("run")
         .arg(data.join("frames"))
         .arg("--camera")

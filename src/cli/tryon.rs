@@ -178,6 +178,9 @@ pub struct TimingLog {
     frames: Vec<FrameTimes>,
 }
 
+/// Picks one stage's milliseconds out of a frame's timings.
+type StageTime = fn(&FrameTimes) -> f64;
+
 impl TimingLog {
     pub fn push(&mut self, t: FrameTimes) {
         self.frames.push(t);
@@ -189,7 +192,7 @@ impl TimingLog {
 
     /// "stage median ms" lines.
     pub fn summary(&self) -> String {
-        let stages: [(&str, fn(&FrameTimes) -> f64); 7] = [
+        let stages: [(&str, StageTime); 7] = [
             ("segment", |t| t.segment),
             ("describe", |t| t.describe),
             ("regress + root", |t| t.regress),

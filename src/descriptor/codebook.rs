@@ -65,7 +65,7 @@ pub fn squared_distance(a: &[f32], b: &[f32]) -> f32 {
 impl Codebook {
     /// A codebook from `k × dim` centre values.
     pub fn from_centres(dim: usize, centres: Vec<f32>) -> Option<Codebook> {
-        (dim > 0 && !centres.is_empty() && centres.len() % dim == 0)
+        (dim > 0 && !centres.is_empty() && centres.len().is_multiple_of(dim))
             .then_some(Codebook { dim, centres })
     }
 

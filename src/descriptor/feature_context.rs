@@ -43,7 +43,7 @@ pub fn bin(d: Vec2, colour: usize, radius: f32) -> Option<usize> {
 pub fn feature_contexts(markers: &[DetectedMarker], height: f32) -> Vec<f32> {
     let radius = FC_RADIUS * height;
     let mut out = vec![0.0f32; markers.len() * FC_LEN];
-    if markers.len() < 2 || !(radius > 0.0) {
+    if markers.len() < 2 || radius.is_nan() || radius <= 0.0 {
         return out;
     }
     let mut tree: KdTree<f32, 2> = KdTree::with_capacity(markers.len());

@@ -321,7 +321,7 @@ mod tests {
                 mask[(y * w + x) as usize] = true;
                 let (cx, cy) = ((x - 30) % 7, (y - 20) % 7);
                 let k = (((x - 30) / 7 + (y - 20) / 7) % 3) as usize;
-                let rgb = if cx >= 1 && cx < 5 && cy >= 1 && cy < 5 {
+                let rgb = if (1..5).contains(&cx) && (1..5).contains(&cy) {
                     colours[k]
                 } else {
                     [123, 184, 64]

@@ -181,6 +181,7 @@ fn centre(part: &BodyPart, world: &[Affine3A]) -> Vec3 {
 
 /// Moves the root of `frame` (root position channels `root_position`) so the projected head, hands and
 /// feet land on the landmarks. Returns the image shift applied, if any.
+#[allow(clippy::too_many_arguments)] // independent per-frame inputs; a struct adds only noise
 pub fn correct_root(
     frame: &mut [f32],
     skeleton: &Skeleton,

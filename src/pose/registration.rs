@@ -78,7 +78,7 @@ impl Registration {
         let shift = Vec2::new(dx as f32, dy as f32) * factor;
         let root_world = self.world.first().map(|t| Vec3::from(t.translation))?;
         let depth = camera.to_camera(root_world).z;
-        if !(depth > 1.0) {
+        if depth.is_nan() || depth <= 1.0 {
             return None;
         }
         let k = &camera.intrinsics;

@@ -505,7 +505,7 @@ mod tests {
             "##......", "##......", "##......", "##......", "........", "##.##...", "##.##...",
             "........", "........", "......##",
         ]);
-        let marker = |i: usize| i % w == 0 || i % w == 6;
+        let marker = |i: usize| i.is_multiple_of(w) || i % w == 6;
         let score = |_: usize| 1.0;
         let rule = RegionRule {
             score: &score,
@@ -621,7 +621,7 @@ mod tests {
         assert_eq!((b.x0, b.y0, b.x1, b.y1), (2, 1, 4, 3));
         let b = PixelBox::around(&m, w, h, 2).expect("two set pixels");
         assert_eq!((b.x0, b.y0, b.x1, b.y1), (0, 0, 5, 4));
-        assert_eq!(PixelBox::around(&vec![false; 20], w, h, 1), None);
+        assert_eq!(PixelBox::around(&[false; 20], w, h, 1), None);
         let b = PixelBox::around(&m, w, h, 0).expect("two set pixels");
         let mut crop = Vec::new();
         b.crop(&m, w, &mut crop);
@@ -657,7 +657,7 @@ mod tests {
             let score = |i: usize| (i % 7) as f32;
             let mut ids = Vec::new();
             let mut whole = labels.to_vec();
-            let marker = |i: usize| i % 3 == 0;
+            let marker = |i: usize| i.is_multiple_of(3);
             let rule = RegionRule { score: &score, marker: &marker, min_area, reach };
             let mut expected = keep_person_region(&mut whole, width, height, &rule, &mut ids);
             fill_holes(&mut whole, width, height, max_hole, &mut ids, &mut expected);

@@ -5,8 +5,9 @@
 //! - a colour bin of (hue, saturation, value) for chromatic pixels, or of value alone for pixels whose
 //!   saturation or value is too low for hue to mean anything ([`MIN_SATURATION`], [`MIN_VALUE`]);
 //! - its hue and saturation, quantised to bytes, for the neighbourhood contrast bins;
-//! and from the value channel its horizontal and vertical central-difference gradients. The tables of
-//! `tables` are indexed by these bins.
+//!
+//! It also gets, from the value channel, its horizontal and vertical central-difference gradients.
+//! The tables of `tables` are indexed by these bins.
 
 use image::RgbImage;
 

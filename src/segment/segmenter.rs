@@ -223,6 +223,8 @@ impl Segmenter {
         let [equal, different] = tables.pair_prior;
         let bins = n[0].len();
         let mut edge_weight = Vec::with_capacity(bins);
+        // `k` indexes four tables at once; a 4-way zip would read worse.
+        #[allow(clippy::needless_range_loop)]
         for k in 0..bins {
             let (a, b, d) = (
                 n[0][k] + equal,
@@ -327,6 +329,8 @@ impl Segmenter {
         // p_bg(colour, pattern) = (1 − s)·trained + s·online(colour)·p_trained(pattern | bg).
         let share = o.adapt_share;
         for class in 0..PATTERN_CLASSES {
+            // `bin` also gives the index `k` into the trained table, so it stays an index.
+            #[allow(clippy::needless_range_loop)]
             for bin in 0..COLOUR_BINS {
                 let k = class * COLOUR_BINS + bin;
                 let trained = (-self.tables.colour[0][k]).exp();
@@ -766,7 +770,7 @@ mod tests {
         let labels: Vec<bool> = (0..w * h)
             .map(|_| {
                 r = r.wrapping_mul(1_103_515_245).wrapping_add(12_345);
-                (r >> 16) % 3 == 0
+                (r >> 16).is_multiple_of(3)
             })
             .collect();
         let mixed = mixed_3x3(&labels, w, h);

@@ -284,7 +284,8 @@ mod tests {
                         } else {
                             [200, 190, 170]
                         };
-                        let inside = x >= 20 + t as u32 && x < 40 + t as u32 && y >= 10 && y < 40;
+                        let inside =
+                            x >= 20 + t as u32 && x < 40 + t as u32 && (10..40).contains(&y);
                         let px = if inside {
                             mask[(y * w + x) as usize] = true;
                             if x % 7 < 3 && y % 7 < 3 {

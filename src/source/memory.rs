@@ -139,38 +139,6 @@ impl FrameSource for MemorySource {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn replays_cyclically_and_fails_on_cue() {
-        let frames = vec![
-            image::RgbImage::new(2, 2),
-            image::RgbImage::from_pixel(2, 2, image::Rgb([9, 9, 9])),
-        ];
-        let mut source = MemorySource::new(frames, 10.0, 5)
-            .expect("frames")
-            .failing_at(3);
-        let mut seen = Vec::new();
-        let error = loop {
-            match source.next_frame() {
-                Ok(Some(f)) => seen.push((f.index, f.image.get_pixel(0, 0).0[0], f.timestamp)),
-                Ok(None) => break None,
-                Err(e) => break Some(e),
-            }
-        };
-        assert_eq!(
-            seen.iter().map(|s| (s.0, s.1)).collect::<Vec<_>>(),
-            [(0, 0), (1, 9), (2, 0)]
-        );
-        assert_eq!(seen[2].2, Duration::from_millis(200));
-        assert!(error.is_some_and(|e| e.to_string().contains("dequeue")));
-        assert!(matches!(source.next_frame(), Ok(None)));
-        assert!(MemorySource::new(Vec::new(), 30.0, 1).is_none());
-    }
-}
-
 /// Delivers another source's frames no faster than their timestamps, as a camera would: for running
 /// the live app on a recorded file.
 pub struct Paced<S> {
@@ -211,5 +179,37 @@ impl<S: FrameSource> FrameSource for Paced<S> {
 
     fn describe(&self) -> String {
         format!("{} (paced)", self.inner.describe())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn replays_cyclically_and_fails_on_cue() {
+        let frames = vec![
+            image::RgbImage::new(2, 2),
+            image::RgbImage::from_pixel(2, 2, image::Rgb([9, 9, 9])),
+        ];
+        let mut source = MemorySource::new(frames, 10.0, 5)
+            .expect("frames")
+            .failing_at(3);
+        let mut seen = Vec::new();
+        let error = loop {
+            match source.next_frame() {
+                Ok(Some(f)) => seen.push((f.index, f.image.get_pixel(0, 0).0[0], f.timestamp)),
+                Ok(None) => break None,
+                Err(e) => break Some(e),
+            }
+        };
+        assert_eq!(
+            seen.iter().map(|s| (s.0, s.1)).collect::<Vec<_>>(),
+            [(0, 0), (1, 9), (2, 0)]
+        );
+        assert_eq!(seen[2].2, Duration::from_millis(200));
+        assert!(error.is_some_and(|e| e.to_string().contains("dequeue")));
+        assert!(matches!(source.next_frame(), Ok(None)));
+        assert!(MemorySource::new(Vec::new(), 30.0, 1).is_none());
     }
 }

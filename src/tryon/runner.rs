@@ -243,7 +243,6 @@ pub fn run(
         }
         {
             let (input, output) = (segmented.clone(), posed.clone());
-            let camera = camera;
             scope.spawn(move || {
                 while let Some(Segmented {
                     captured,

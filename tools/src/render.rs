@@ -342,7 +342,7 @@ pub fn gaussian_blur(
 
 /// Composites `layer` over `background` (both 0–255 RGB f32), applies the sensor and quantizes.
 pub fn compose(
-    background: &mut Vec<[f32; 3]>,
+    background: &mut [[f32; 3]],
     layer: &BodyLayer,
     sensor: &Sensor,
     rng: &mut impl Rng,

@@ -137,8 +137,8 @@ enum Command {
 }
 
 fn segment(
-    suit_dir: &PathBuf,
-    data: &PathBuf,
+    suit_dir: &Path,
+    data: &Path,
     frames: usize,
     start: usize,
     held_back: usize,
@@ -208,7 +208,7 @@ fn read_mask(dataset: &Dataset, index: usize) -> anyhow::Result<Mask> {
 }
 
 fn codebooks(
-    suit_dir: &PathBuf,
+    suit_dir: &Path,
     data: &[PathBuf],
     max_vectors: usize,
     seed: u64,
@@ -498,7 +498,7 @@ impl TrainingData {
 }
 
 fn train_suit(
-    suit_dir: &PathBuf,
+    suit_dir: &Path,
     data: &[PathBuf],
     basis: usize,
     descriptor: &str,
@@ -803,7 +803,7 @@ fn evaluate(
 }
 
 fn eval(
-    suit_dir: &PathBuf,
+    suit_dir: &Path,
     data: &[PathBuf],
     truth_masks: bool,
     csv: Option<&PathBuf>,
