@@ -38,8 +38,8 @@ pub struct GarmentArgs {
     /// Fabric preset: light, medium, stiff, chiffon, silk, cotton_poplin, cotton_jersey, wool, denim.
     #[arg(long, default_value = "medium")]
     pub material: String,
-    /// Simulate as the live app does (2 cm garment, 32 substeps) instead of the quality mode
-    /// (1 cm garment, 64 substeps) that recorded input gets by default.
+    /// Simulate as the live app does (2 cm garment, 40 substeps) instead of the quality mode
+    /// (1 cm garment, 80 substeps) that recorded input gets by default.
     #[arg(long)]
     pub live_cloth: bool,
     /// Debug overlays drawn into the frames: any of mask, markers, skeleton, timings (comma-separated).

@@ -9,7 +9,7 @@
 //!
 //! **Method.** Macklin, Müller and Chentanez 2016 (XPBD) with the "small steps" scheme of Macklin et
 //! al. 2019: a frame of `1/fps` seconds is `substeps` solver steps of one constraint iteration each
-//! (32 × 1 live; see [`SolverSettings::live`] for why 32). Per substep of length `h`:
+//! (40 × 1 live; see [`SolverSettings::live`] for why 40). Per substep of length `h`:
 //!
 //! 1. The body is posed at the substep's time by interpolating the two skeleton frames
 //!    ([`BodyRig::pose_between`]), so a fast limb moves at most a centimetre or so per substep.
@@ -19,7 +19,7 @@
 //! 3. Constraints, Gauss–Seidel, in this order:
 //!    - **loose anchors** (a dress's waist): toward their slack of `bone · local`, by the fraction
 //!      `1 − exp(−h/τ)` of the way per substep (`τ` = `loose_anchor_seconds`, 5 ms live: about a
-//!      fifth of the way at 32 substeps), not all of it. Held hard, the waist fought the tethers
+//!      sixth of the way at 40 substeps), not all of it. Held hard, the waist fought the tethers
 //!      from the neckline whenever the spine arched or the pelvis tilted further than the slack
 //!      allows: every substep the belt pulled the waist ring back by up to 4 cm, the edges above
 //!      it starting the sweeps 150–240 % long, and the sweeps left the bodice's edges strained —
@@ -49,7 +49,25 @@
 //!      interleaved, the processor overlaps them and a frame takes about half the time. Compressed
 //!      edges get `compression` (0.8) of their correction: cloth buckles rather than compresses, a
 //!      2 cm mesh cannot show the buckles, and full-strength compression projections were seen to
-//!      pump energy into crumpled regions;
+//!      pump energy into crumpled regions (and on the kick they raised the worst frame's
+//!      95th-percentile strain, e.g. dress 2,000 vertices 2.29 → 2.70 %). Each projection computes
+//!      its correction `(l − l₀)/l` from `l²/l₀²` without a square root ([`stretch_correction`], a
+//!      Padé approximant exact at rest and to second order; a sweep takes about an eighth less
+//!      time). The sweeps are accelerated with the Chebyshev semi-iterative method (Wang 2015, "A
+//!      Chebyshev semi-iterative approach for accelerating projective and position-based dynamics"):
+//!      after each sweep from the second on, the iterate is pushed on from the one two sweeps back
+//!      by a weight `ω` (1.39 at the second sweep, then about 1.27: [`chebyshev_weight`],
+//!      `chebyshev_rho` = ρ = 0.75). Gauss–Seidel
+//!      removes the short-wavelength error in the first sweeps and the long-wavelength error slowly
+//!      (the corrections of successive plain sweeps shrink by 0.38, 0.54, 0.77, 0.87, 0.91 on the
+//!      kick), which is what the extrapolation speeds up. ρ is a chosen constant, not estimated:
+//!      on the kick (`cargo bench --bench cloth`, the worst frame's 95th-percentile strain in the
+//!      four cases T-shirt 2k / 4k, dress 2k / 4k, at 40 × 6) ρ = 0.7 gave 1.81 / 1.56 / 1.95 /
+//!      1.73 %, 0.75 gave 1.63 / 1.69 / 1.71 / 1.84 %, 0.8 gave 1.90 / 1.63 / 2.02 / 1.67 %, 0.85 gave
+//!      1.68 / 1.56 / 2.08 / 1.71 %, and 0.95 diverged (33–60 %, at 32 × 6): the nonlinear, unsymmetric sweep
+//!      is not the linear symmetric iteration the method assumes, so ρ must stay well below the
+//!      sweeps' asymptotic ratio. Plain over-relaxation of each projection instead (SOR, ω = 1.3 and
+//!      1.6) made every kick case worse (2.2–3.1 %);
 //!    - **bending**: the isometric bending model of Bergou et al. 2006 as one linear vector
 //!      constraint `Σ Kᵢxᵢ` per interior edge with cotangent weights `K` from the (flat, as sewn)
 //!      rest shape — cheaper than the dihedral-angle constraint, no trigonometry, and exact in one
@@ -68,6 +86,22 @@
 //!
 //! With λ starting at zero every substep and one iteration, each XPBD update is
 //! `Δλ = −C/(Σwᵢ|∇Cᵢ|² + α/h²)`, precomputed per constraint: the solver carries no multipliers.
+//!
+//! **What else was tried on the kick** (the worst frame's 95th-percentile strain, T-shirt 2k / 4k,
+//! dress 2k / 4k, all at 32 × 6; it was 1.93 / 2.18 / 2.29 / 2.36 %). On the worst frame the top 5 %
+//! of edges are spread over the garment, about half of them compressed (the front of the skirt
+//! over the raised thigh, the T-shirt's front hem) and half stretched (the bodice, the T-shirt's
+//! back at armpit height); the sleeve-join slivers make the maxima, not the 95th percentile.
+//! Within a substep of the dress's worst frame the 95th percentile is 2.40 % after the
+//! integration, 2.68 % after the tethers, 1.97 % after the sweeps, 2.01 % after bending and
+//! 2.28 % after the collisions. Not kept: sweeping alternately forwards and backwards (2.36 / 2.99
+//! / 2.76 / 3.09 %: the anchors-outward order is what carries the weight down); bending before
+//! the sweeps (2.07 / 2.00 / 2.55 / 2.37 %); a collision pass and a stretch sweep between the
+//! sweeps and the final collisions (1.72 / 2.47 / 2.11 / 2.41 %, and a quarter slower); tether
+//! slack of 1 % or 3 % (up to 2.7 and 2.95 %: the tight tethers help); no bending at all (2.00 /
+//! 2.32 / 2.28 / 2.45 %) or ten times softer (2.09 / 2.13 / 2.16 / 2.58 %); the dress's waist belt
+//! off (dress 2.04 / 2.35 %) or at τ = 50 ms (2.18 / 2.39 %); Chebyshev sweeps at 32 substeps
+//! (ρ = 0.6–0.8: 1.70–2.20 / 2.02–2.17 / 2.11–2.35 / 2.17–2.32 %).
 //!
 //! **Broad phase.** Once per frame each capsule's box swept over the frame (poses at t = 0, ½, 1,
 //! padded) is tested against a box around each vertex sized by how far it can travel in the frame;
@@ -136,6 +170,9 @@ pub struct SolverSettings {
     pub loose_anchor_seconds: f32,
     /// Sweeps over the stretch constraints per iteration (see the module documentation).
     pub stretch_sweeps: u32,
+    /// Chebyshev acceleration of the stretch sweeps (Wang 2015): the assumed spectral radius `ρ`
+    /// of one sweep, in `[0, 1)`; 0 sweeps plainly. See the module documentation.
+    pub chebyshev_rho: f32,
     /// Fraction of a compressed edge's correction applied (1 = as stiff in compression as in
     /// tension). Cloth buckles rather than compresses; full-strength compression projections on a
     /// 2 cm mesh that cannot represent the buckles feed energy into it.
@@ -154,17 +191,38 @@ pub struct SolverSettings {
 }
 
 impl SolverSettings {
-    /// Live mode: 30 frames/s, 32 substeps × 1 iteration, 6 stretch sweeps.
+    /// Live mode: 30 frames/s, 40 substeps × 1 iteration, 6 Chebyshev-accelerated stretch sweeps
+    /// (ρ = 0.75).
     ///
     /// The strain left by the single iteration falls with the square of the substep and about
     /// linearly with the sweeps: on CMU walk 02_01 and kick 10_03 (`cargo bench --bench cloth`, 4,000
     /// vertices) the worst frame's 95th-percentile strain was 4.8 % (walk T-shirt) and 9.0 % (kick
     /// T-shirt) with 16 × 4, and 2.0 % and 2.6 % with 32 × 6. Since the constraints are interleaved
     /// ([`interleave`]) 32 × 6 costs what 16 × 4 used to (about 12 ms a frame at 4,000 vertices).
+    ///
+    /// At 32 × 6 the kick's worst frame was still 1.9–2.4 % in the four cases of the bench, and
+    /// substeps, not sweeps, brought it down (T-shirt 2k / 4k, dress 2k / 4k): 32 × 12 gave 1.92 /
+    /// 1.94 / 2.01 / 1.92 %, 64 × 6 1.47 / 1.31 / 1.70 / 1.55 %, 40 × 6 1.83 / 1.71 / 2.16 / 2.08 %,
+    /// 44 × 6 1.73 / 1.57 / 2.01 / 1.94 %, 48 × 5 1.80 / 1.71 / 2.19 / 1.92 %, 48 × 4 2.01 / 1.76 /
+    /// 2.34 / 2.27 %, 40 × 5 1.84 / 1.92 / 2.08 / 2.23 %. None within the speed target met 2 % in
+    /// all four; 40 × 6 with the Chebyshev sweeps (see the module documentation) gives 1.63 / 1.69 /
+    /// 1.71 / 1.84 % and the walk 0.7–1.2 % (was 1.1–1.7 %), and the square-root-free projection
+    /// pays for part of the 25 % more substeps. The worst frame moves by ±0.3 % with any small
+    /// change (the kick's folds are chaotic): with the exact square root the same settings gave
+    /// 1.90 / 1.45 / 1.59 / 1.79 %. At 2,500 and 3,300 vertices the kick gives 1.71 / 1.44 / 1.90 /
+    /// 1.80 % (32 × 6 plain: 2.14 / 2.31 / 2.47 / 2.48 %).
+    ///
+    /// Speed: a frame takes about 1.2–1.3 times as long as with 32 plain sweeps (0.76–0.83 of the old
+    /// frame rate, runs of the old and new code alternated on a busy machine), so the bench's old
+    /// 78–84 frames/s at 4,000 vertices and 158–168 at 2,000 become about 62–66 and 125–133: the
+    /// targets (60 and 120) are met with little to spare. The Chebyshev relaxation costs about a
+    /// third of a sweep each time. 36 × 6 would leave more speed (about 0.88 of the old rate) but
+    /// only just meets the strain target on the kick (1.93 / 1.72 / 1.89 / 1.95 %); 40 × 5 gives
+    /// 1.95 / 1.59 / 1.80 / 1.99 %.
     pub fn live() -> SolverSettings {
         SolverSettings {
             fps: 30.0,
-            substeps: 32,
+            substeps: 40,
             iterations: 1,
             gravity: Vec3::new(0.0, -981.0, 0.0),
             max_speed: 1000.0,
@@ -172,6 +230,7 @@ impl SolverSettings {
             tether_slack: 0.0,
             loose_anchor_seconds: 0.005,
             stretch_sweeps: 6,
+            chebyshev_rho: 0.75,
             compression: 0.8,
             jump_distance_cm: 50.0,
             pose_jump_cm: 60.0,
@@ -183,7 +242,7 @@ impl SolverSettings {
     /// Quality mode (recorded input): twice the substeps.
     pub fn quality() -> SolverSettings {
         SolverSettings {
-            substeps: 64,
+            substeps: 80,
             ..SolverSettings::live()
         }
     }
@@ -264,6 +323,8 @@ struct Edge {
     i: u32,
     j: u32,
     rest: f32,
+    /// 1 / rest².
+    inv_rest2: f32,
     /// wᵢ / (wᵢ + wⱼ + α/h²), and the same for j.
     ci: f32,
     cj: f32,
@@ -332,6 +393,9 @@ pub struct Cloth {
     start_frame: Vec<f32>,
     blend_a: Vec<f32>,
     blend_b: Vec<f32>,
+    /// The two previous iterates of the Chebyshev-accelerated stretch sweeps.
+    sweep_even: Vec<Vec3A>,
+    sweep_odd: Vec<Vec3A>,
 }
 
 impl Cloth {
@@ -385,6 +449,12 @@ impl Cloth {
             settings.iterations as f32,
             (1..=100).contains(&settings.iterations),
             "1..=100",
+        )?;
+        check(
+            "chebyshev_rho",
+            settings.chebyshev_rho,
+            (0.0..1.0).contains(&settings.chebyshev_rho),
+            "0 ≤ ρ < 1",
         )?;
         check(
             "loose_anchor_seconds",
@@ -459,6 +529,8 @@ impl Cloth {
             start_frame: Vec::new(),
             blend_a: Vec::new(),
             blend_b: Vec::new(),
+            sweep_even: Vec::new(),
+            sweep_odd: Vec::new(),
         };
         cloth.build_constraints();
         cloth.update_normals();
@@ -556,6 +628,7 @@ impl Cloth {
                         i,
                         j,
                         rest,
+                        inv_rest2: 1.0 / (rest * rest),
                         ci: wi / denominator,
                         cj: wj / denominator,
                     },
@@ -940,9 +1013,7 @@ impl Cloth {
             // Tethers before the stretch sweeps, so that the sweeps spread each tether's pull over
             // the edges around its vertex (see the module documentation).
             self.solve_tethers();
-            for _ in 0..self.settings.stretch_sweeps.max(1) {
-                self.solve_stretch();
-            }
+            self.stretch_sweeps();
             self.solve_bending();
             self.solve_collisions();
         }
@@ -1054,18 +1125,45 @@ impl Cloth {
         }
     }
 
+    /// `stretch_sweeps` sweeps over the stretch constraints, Chebyshev-accelerated when
+    /// `chebyshev_rho` > 0: after sweep `k` the iterate is `x₋ + ω_k (x̃ − x₋)`, `x̃` the sweep's
+    /// result and `x₋` the iterate two sweeps back ([`chebyshev_weight`]).
+    fn stretch_sweeps(&mut self) {
+        let sweeps = self.settings.stretch_sweeps.max(1);
+        let rho = self.settings.chebyshev_rho;
+        if rho <= 0.0 {
+            for _ in 0..sweeps {
+                self.solve_stretch();
+            }
+            return;
+        }
+        // The iterates two sweeps back, alternately in `even` (x₀, x₂, …) and `odd` (x₁, x₃, …):
+        // each relaxation reads `x_{k−1}` and leaves `x_{k+1}` in its place.
+        let mut even = std::mem::take(&mut self.sweep_even);
+        let mut odd = std::mem::take(&mut self.sweep_odd);
+        even.clone_from(&self.x);
+        self.solve_stretch();
+        if sweeps > 2 {
+            odd.clone_from(&self.x);
+        }
+        let mut omega = 1.0;
+        for k in 1..sweeps {
+            self.solve_stretch();
+            omega = chebyshev_weight(k, rho, omega);
+            let two_back = if k % 2 == 1 { &mut even } else { &mut odd };
+            over_relax(&mut self.x, two_back, omega);
+        }
+        self.sweep_even = even;
+        self.sweep_odd = odd;
+    }
+
     fn solve_stretch(&mut self) {
         let x = &mut self.x;
         let compression = self.settings.compression.clamp(0.0, 1.0);
         for e in &self.edges {
             let (i, j) = (e.i as usize, e.j as usize);
             let d = x[j] - x[i];
-            let l2 = d.length_squared();
-            if l2 <= 1e-12 {
-                continue;
-            }
-            let l = l2.sqrt();
-            let mut s = (l - e.rest) / l;
+            let mut s = stretch_correction(d.length_squared() * e.inv_rest2);
             if s < 0.0 {
                 s *= compression;
             }
@@ -1119,10 +1217,13 @@ impl Cloth {
                 if !self.boxes[c].contains(Vec3::from(*p)) {
                     return (false, false);
                 }
-                let (d, n) = self.prepared[c].query(*p);
+                // The distance alone first: most tests find the vertex outside, and the normal
+                // costs a division and a normalisation.
                 let target = offset - allowed;
+                let d = self.prepared[c].distance(*p);
                 if d < target {
-                    let depth = target - d;
+                    let (d, n) = self.prepared[c].query(*p);
+                    let depth = (target - d).max(0.0);
                     *p += n * depth;
                     if deepest.is_none_or(|(best, _, _)| depth > best) {
                         *deepest = Some((depth, n, c));
@@ -1296,6 +1397,42 @@ fn interleave<T: Copy, const K: usize>(
         }
     }
     out
+}
+
+/// The distance constraint's correction `(l − l₀)/l` from `u = l²/l₀²`, without a square root:
+/// `1 − u^(−1/2)` with `u^(−1/2)` replaced by its [1/1] Padé approximant about `u = 1`,
+/// `(3 + u)/(1 + 3u)`, which gives `2(u − 1)/(1 + 3u)`.
+///
+/// Exact at rest (`u = 1`) and to second order in the strain, so the projection converges to the
+/// same lengths; at larger strains it corrects slightly less than the exact projection (10 %
+/// stretch: 0.0907 for 0.0909; 100 %: 0.46 for 0.5; 50 % compression: −0.86 for −1) and stays
+/// between −2 and 2/3 however far the edge is pulled or squashed, so a projection never
+/// overshoots or flips an edge (and an edge squashed to nothing, where the exact form is
+/// unbounded, is left alone). The square root and division of the exact form took about an eighth
+/// of each sweep.
+#[inline]
+fn stretch_correction(u: f32) -> f32 {
+    2.0 * (u - 1.0) / (1.0 + 3.0 * u)
+}
+
+/// Chebyshev semi-iterative weight `ω` for sweep `k` (from 0) given the previous sweep's weight
+/// (Wang 2015, after Golub and Van Loan): 1, then `2/(2 − ρ²)`, then `4/(4 − ρ²ω)`; it falls
+/// towards `2/(1 + √(1 − ρ²))`.
+fn chebyshev_weight(k: u32, rho: f32, previous: f32) -> f32 {
+    match k {
+        0 => 1.0,
+        1 => 2.0 / (2.0 - rho * rho),
+        _ => 4.0 / (4.0 - rho * rho * previous),
+    }
+}
+
+/// `x ← before + ω (x − before)` for every vertex (kinematic ones have `x = before`), and
+/// `before ← x`.
+fn over_relax(x: &mut [Vec3A], before: &mut [Vec3A], omega: f32) {
+    for (x, b) in x.iter_mut().zip(before) {
+        *x = *b + (*x - *b) * omega;
+        *b = *x;
+    }
 }
 
 /// 95th percentile (nearest rank) and maximum; reorders `values`.
@@ -1595,6 +1732,49 @@ mod tests {
     }
 
     #[test]
+    fn the_square_root_free_correction_matches_the_exact_one_near_rest_and_never_overshoots() {
+        assert_eq!(stretch_correction(1.0), 0.0);
+        for strain in [-0.5f32, -0.1, -0.02, 0.005, 0.02, 0.1, 0.5, 1.0, 10.0] {
+            let l = 1.0 + strain;
+            let exact = (l - 1.0) / l;
+            let approx = stretch_correction(l * l);
+            // Same sign, never more than the exact correction, third-order close.
+            assert!(approx * exact > 0.0, "{strain}");
+            assert!(
+                approx.abs() <= exact.abs() + 1e-7,
+                "{strain}: {approx} vs {exact}"
+            );
+            if strain.abs() <= 0.1 {
+                assert!(
+                    (approx - exact).abs() <= 0.5 * strain.abs().powi(3) + 1e-7,
+                    "{strain}"
+                );
+            }
+            assert!(approx > -2.0 && approx < 2.0 / 3.0);
+        }
+    }
+
+    #[test]
+    fn chebyshev_weights_start_at_one_and_settle_at_the_optimum() {
+        let rho = 0.75f32;
+        let mut omega = 1.0;
+        let mut weights = Vec::new();
+        for k in 0..40 {
+            omega = chebyshev_weight(k, rho, omega);
+            weights.push(omega);
+        }
+        assert_eq!(weights[0], 1.0);
+        assert!(weights.iter().all(|&w| (1.0..2.0).contains(&w)));
+        let optimum = 2.0 / (1.0 + (1.0 - rho * rho).sqrt());
+        assert!((weights[39] - optimum).abs() < 1e-5, "{weights:?}");
+        let mut x = vec![Vec3A::ONE, Vec3A::ZERO];
+        let mut before = vec![Vec3A::ZERO, Vec3A::ZERO];
+        over_relax(&mut x, &mut before, 1.5);
+        assert_eq!(x, vec![Vec3A::splat(1.5), Vec3A::ZERO]);
+        assert_eq!(before, x);
+    }
+
+    #[test]
     fn flat_hinges_have_no_bending_and_folded_ones_do() {
         // Two triangles sharing an edge, flat: Σ Kᵢxᵢ = 0; folded by 90°: not.
         let rig = rig_with(vec![]);
@@ -1841,21 +2021,23 @@ mod tests {
         let pose = frames.frame(0);
         cloth.dress(&rig, pose);
         let mut energies = Vec::new();
-        for _ in 0..150 {
+        for _ in 0..300 {
             cloth.step_frame(&rig, pose, pose);
             energies.push(cloth.kinetic_energy());
         }
-        // Air drag, damping and friction take the swing out of it: after five seconds less than
-        // 5 % of the energy the settling started with is left (the skirt weighs about 100 g; 50 erg
-        // is a mean speed of 1 cm/s). With 32 substeps the solver damps less by itself than it did
-        // with 16, and the skirt's slow pendulum sway (period ≈ 1.3 s) takes longer to die out:
-        // about 10 % was left after three seconds, 3.5 % after five.
+        // Air drag, damping and friction take the swing out of it: after ten seconds less than
+        // 10 % of the energy the settling started with is left, and less than 50 erg (the skirt
+        // weighs about 100 g; 50 erg is a mean speed of 1 cm/s). The more substeps, the less the
+        // solver damps by itself, and the longer the skirt's slow pendulum sway (period ≈ 1.3 s)
+        // takes to die out: with 16 substeps about 10 % was left after three seconds; with 32,
+        // 3.8 % after five and 0.8 % after ten; with 40 (and Chebyshev-accelerated sweeps),
+        // 12 % after five and 6.8 % (37 erg) after ten.
         let mean = |e: &[f32]| e.iter().sum::<f32>() / e.len() as f32;
         let (first, last) = (
             mean(&energies[..10]),
             mean(&energies[energies.len() - 10..]),
         );
-        assert!(last < 0.05 * first && last < 100.0, "{energies:?}");
+        assert!(last < 0.1 * first && last < 50.0, "{energies:?}");
     }
 
     #[test]

@@ -78,7 +78,7 @@ impl GarmentChoice {
     }
 }
 
-/// Live (coarse garment, 32 substeps) or quality (about 4× the vertices, 64 substeps).
+/// Live (coarse garment, 40 substeps) or quality (about 4× the vertices, 80 substeps).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SimulationMode {
     Live,
