@@ -1,0 +1,215 @@
+//! Cloth quality on the bench's eight cases without the criterion timing:
+//! `cargo run --release --example cloth_quality [filter] [-v]`.
+//!
+//! Prints `run_motion`'s summary for walk 02_01 and kick 10_03, T-shirt and dress at about 2,000
+//! and 4,000 vertices (the same cases as `cargo bench --bench cloth`). With `-v`, also where the
+//! worst frame's top 5 % of edges lie: stretched or compressed, rest length, nearest body part,
+//! height band. The filter keeps the cases whose name (`kick/dress/4000`, …) contains it.
+//!
+//! Environment overrides of the live settings, for experiments: `CLOTH_SUBSTEPS`, `CLOTH_SWEEPS`,
+//! `CLOTH_RHO` (Chebyshev ρ, 0 = plain sweeps), `CLOTH_COMPRESSION`, `CLOTH_TETHER_SLACK`,
+//! `CLOTH_TAU` (loose-anchor time constant, s), `CLOTH_BEND_SCALE` (× the bending compliance),
+//! `CLOTH_COUNTS` (vertex counts, e.g. `2500,3300`). The frames/s printed are from `run_motion`'s
+//! stepping time: one run, noisy; use `cargo bench --bench cloth` for speed.
+
+use std::path::Path;
+
+use glam::Vec3A;
+use suitcap::body::Subject;
+use suitcap::bvh::Motion;
+use suitcap::cloth::capsule::Capsule;
+use suitcap::cloth::garment::{GarmentKind, GarmentMesh};
+use suitcap::cloth::material::Material;
+use suitcap::cloth::proxies::{BodyRig, DEFAULT_MARGIN_CM};
+use suitcap::cloth::solver::{run_motion, Cloth, SolverSettings};
+use suitcap::cloth::topology::unique_edges;
+
+const FIRST_FRAME: usize = 6;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let verbose = args.iter().any(|a| a == "-v");
+    let only = args
+        .iter()
+        .find(|a| *a != "-v")
+        .cloned()
+        .unwrap_or_default();
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let subject = Subject::find("chidi").ok_or("no subject chidi")?;
+    // Vertex counts (default the bench's 2,000 and 4,000), e.g. CLOTH_COUNTS=2400,3400.
+    let counts: Vec<usize> = std::env::var("CLOTH_COUNTS")
+        .ok()
+        .map(|s| s.split(',').filter_map(|c| c.trim().parse().ok()).collect())
+        .unwrap_or_else(|| vec![2000, 4000]);
+    let mut settings = SolverSettings::live();
+    let env = |name: &str| std::env::var(name).ok().and_then(|s| s.parse::<f32>().ok());
+    if let Some(v) = env("CLOTH_SUBSTEPS") {
+        settings.substeps = v as u32;
+    }
+    if let Some(v) = env("CLOTH_SWEEPS") {
+        settings.stretch_sweeps = v as u32;
+    }
+    if let Some(v) = env("CLOTH_TETHER_SLACK") {
+        settings.tether_slack = v;
+    }
+    if let Some(v) = env("CLOTH_TAU") {
+        settings.loose_anchor_seconds = v;
+    }
+    if let Some(v) = env("CLOTH_RHO") {
+        settings.chebyshev_rho = v;
+    }
+    if let Some(v) = env("CLOTH_COMPRESSION") {
+        settings.compression = v;
+    }
+    let mut material = Material::medium();
+    if let Some(v) = env("CLOTH_BEND_SCALE") {
+        material.bend_compliance *= v;
+    }
+    for (clip_name, clip) in [
+        ("walk", "tests/data/mocap/cmu_02_01_walk.bvh"),
+        ("kick", "tests/data/mocap/cmu_10_03_kick_ball.bvh"),
+    ] {
+        let motion = Motion::load(&repo.join(clip))?;
+        let rig = BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM)?;
+        let (frames, _) =
+            rig.scale_motion(&motion)
+                .resample(FIRST_FRAME, None, settings.fps as f64)?;
+        for kind in [GarmentKind::TShirt, GarmentKind::Dress] {
+            for &target in &counts {
+                let case = format!("{clip_name}/{}/{target}", kind.name());
+                if !only.is_empty() && !case.contains(&only) {
+                    continue;
+                }
+                let (mesh, _) = GarmentMesh::with_vertex_count(kind, &rig, target, 2.5)?;
+                let mut cloth = Cloth::new(&mesh, &material, &settings, &rig)?;
+                let mut worst: (f32, usize, Vec<Vec3A>, Vec<Capsule>) =
+                    (0.0, 0, Vec::new(), Vec::new());
+                let summary = run_motion(&rig, &mut cloth, &frames, |k, c, q| {
+                    if k > 0 && q.strain_p95 > worst.0 {
+                        worst = (
+                            q.strain_p95,
+                            k,
+                            c.positions().to_vec(),
+                            c.pose().capsules.clone(),
+                        );
+                    }
+                })?;
+                println!(
+                    "{case:22} p95 {:.2} / {:.2} %  max {:5.1} %  pen {:.2} mm  {:.0} fps",
+                    100.0 * summary.strain_p95_worst,
+                    100.0 * summary.strain_p95_mean,
+                    100.0 * summary.strain_max,
+                    10.0 * summary.penetration_max_cm,
+                    summary.frames_per_second()
+                );
+                if verbose {
+                    describe_top(&rig, &cloth, &mesh, worst.1, &worst.2, &worst.3);
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Where the top 5 % of edges of one frame lie.
+fn describe_top(
+    rig: &BodyRig,
+    cloth: &Cloth,
+    mesh: &GarmentMesh,
+    frame: usize,
+    x: &[Vec3A],
+    capsules: &[Capsule],
+) {
+    let rest = cloth.rest_positions();
+    let edges = unique_edges(&mesh.triangles);
+    let mut strains: Vec<(f32, usize)> = edges
+        .iter()
+        .enumerate()
+        .map(|(e, &[i, j])| {
+            let l0 = rest[i as usize].distance(rest[j as usize]);
+            ((x[i as usize].distance(x[j as usize]) - l0) / l0, e)
+        })
+        .collect();
+    strains.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
+    let top = &strains[..strains.len() / 20];
+    let mean_rest: f32 = edges
+        .iter()
+        .map(|&[i, j]| rest[i as usize].distance(rest[j as usize]))
+        .sum::<f32>()
+        / edges.len() as f32;
+    let stretched = top.iter().filter(|s| s.0 > 0.0).count();
+    println!(
+        "   worst frame {frame}: top {} edges, {} stretched / {} compressed; mean rest {:.2} cm",
+        top.len(),
+        stretched,
+        top.len() - stretched,
+        mean_rest
+    );
+    // Per nearest body part (at rest), how many of the top edges and their mean rest length.
+    let mut parts: Vec<(String, usize, usize, f32, f32)> = Vec::new();
+    for &(s, e) in top {
+        let [i, j] = edges[e];
+        let mid = (x[i as usize] + x[j as usize]) * 0.5;
+        let mut best = (f32::INFINITY, "?");
+        for (pc, cap) in rig.proxies().iter().zip(capsules) {
+            let d = cap.signed_distance(mid.into());
+            if d < best.0 {
+                best = (d, rig.body().parts[pc.part].name);
+            }
+        }
+        let l0 = rest[i as usize].distance(rest[j as usize]);
+        let name = best.1.to_string();
+        match parts.iter_mut().find(|p| p.0 == name) {
+            Some(p) => {
+                p.1 += 1;
+                p.2 += (s > 0.0) as usize;
+                p.3 += l0;
+                p.4 += best.0;
+            }
+            None => parts.push((name, 1, (s > 0.0) as usize, l0, best.0)),
+        }
+    }
+    parts.sort_by_key(|p| std::cmp::Reverse(p.1));
+    for (name, n, st, l0, d) in parts {
+        println!(
+            "     {name:16} {n:4} edges ({st} stretched), mean rest {:.2} cm, mean distance {:+.2} cm",
+            l0 / n as f32,
+            d / n as f32
+        );
+    }
+    // By rest height band (10 cm) and side (front z > 0 / back).
+    let mut bands: std::collections::BTreeMap<(i32, bool), (usize, usize, usize)> =
+        Default::default();
+    for (k, &(s, e)) in strains.iter().enumerate() {
+        let [i, j] = edges[e];
+        let p = (rest[i as usize] + rest[j as usize]) * 0.5;
+        let b = bands
+            .entry(((p.y / 10.0).floor() as i32, p.z > 0.0))
+            .or_default();
+        b.0 += 1;
+        if k < top.len() {
+            b.1 += 1;
+            b.2 += (s > 0.0) as usize;
+        }
+    }
+    for ((y, front), (n, t, st)) in bands.iter().rev() {
+        println!(
+            "     y {:4}..{:4} {:5} {n:5} edges, {t:4} in top ({st} stretched)",
+            y * 10,
+            y * 10 + 10,
+            if *front { "front" } else { "back" }
+        );
+    }
+    for &(s, e) in strains.iter().take(5) {
+        let [i, j] = edges[e];
+        let p = (rest[i as usize] + rest[j as usize]) * 0.5;
+        println!(
+            "     {:+.1} % edge {i}-{j} rest {:.2} cm at rest ({:.0}, {:.0}, {:.0})",
+            100.0 * s,
+            rest[i as usize].distance(rest[j as usize]),
+            p.x,
+            p.y,
+            p.z
+        );
+    }
+}
