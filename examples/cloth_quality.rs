@@ -9,7 +9,8 @@
 //! Environment overrides of the live settings, for experiments: `CLOTH_SUBSTEPS`, `CLOTH_SWEEPS`,
 //! `CLOTH_RHO` (Chebyshev ρ, 0 = plain sweeps), `CLOTH_COMPRESSION`, `CLOTH_TETHER_SLACK`,
 //! `CLOTH_TAU` (loose-anchor time constant, s), `CLOTH_BEND_SCALE` (× the bending compliance),
-//! `CLOTH_COUNTS` (vertex counts, e.g. `2500,3300`). The frames/s printed are from `run_motion`'s
+//! `CLOTH_COUNTS` (vertex counts, e.g. `2500,3300`), `CLOTH_MATERIAL` (a preset name, default
+//! medium). The frames/s printed are from `run_motion`'s
 //! stepping time: one run, noisy; use `cargo bench --bench cloth` for speed.
 
 use std::path::Path;
@@ -61,7 +62,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(v) = env("CLOTH_COMPRESSION") {
         settings.compression = v;
     }
-    let mut material = Material::medium();
+    let mut material = match std::env::var("CLOTH_MATERIAL") {
+        Ok(name) => Material::preset(&name).ok_or(format!("no material preset {name}"))?,
+        Err(_) => Material::medium(),
+    };
     if let Some(v) = env("CLOTH_BEND_SCALE") {
         material.bend_compliance *= v;
     }

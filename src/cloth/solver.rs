@@ -210,7 +210,10 @@ impl SolverSettings {
     /// pays for part of the 25 % more substeps. The worst frame moves by ±0.3 % with any small
     /// change (the kick's folds are chaotic): with the exact square root the same settings gave
     /// 1.90 / 1.45 / 1.59 / 1.79 %. At 2,500 and 3,300 vertices the kick gives 1.71 / 1.44 / 1.90 /
-    /// 1.80 % (32 × 6 plain: 2.14 / 2.31 / 2.47 / 2.48 %).
+    /// 1.80 % (32 × 6 plain: 2.14 / 2.31 / 2.47 / 2.48 %). Nothing diverged with the other
+    /// materials either, and each was better than with 32 × 6 plain (which does not meet 2 % with
+    /// them): light (= chiffon) 2.28 / 1.99 / 2.51 / 2.43 % (was 2.66 / 3.35 / 3.03 / 3.53 %), stiff
+    /// (= denim) 1.79 / 2.72 / 1.95 / 2.33 % (was 2.50 / 3.34 / 2.21 / 3.25 %).
     ///
     /// Speed: a frame takes about 1.2–1.3 times as long as with 32 plain sweeps (0.76–0.83 of the old
     /// frame rate, runs of the old and new code alternated on a busy machine), so the bench's old
