@@ -19,7 +19,7 @@
 //!   per unit width, each stretched by `ε·h`, so `T = ε/α` whatever the edge length: `α = 1/k`,
 //!   `k` the fabric's tensile stiffness per unit width. Woven fabrics extend a few per cent at
 //!   5 N/cm (k ≈ 10⁴ N/m), knits tens of per cent (k ≈ 10³ N/m); 1 N/m = 10³ dyn/cm. Either way
-//!   a garment's own weight (≈ 1 N/m of width) strains it well under 1 %, and with 32 substeps per
+//!   a garment's own weight (≈ 1 N/m of width) strains it well under 1 %, and with 40 substeps per
 //!   frame `α/Δt²` is small beside the inverse masses: the edges are near-inextensible, as the
 //!   issue wants, and the remaining strain comes from the solver's single iteration, not from `α`.
 //! - **Bending**: the isometric bending model of Bergou et al. 2006 (the quadratic energy for
