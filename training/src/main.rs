@@ -378,11 +378,20 @@ fn pose_vector_error(rvm: &suitcap::pose::rvm::Rvm, x: &[f32], y: &[f32], output
     total / count.max(1) as f64
 }
 
-/// Descriptors and pose vectors of training datasets, some held back to choose the kernel width:
-/// with five or more datasets every fifth *dataset* (whole motions, so that the width is chosen for
-/// motions the regressor has not seen, as at run time; neighbouring frames of one clip are nearly
-/// the same pose, and every tenth frame held back rewarded memorising them: held-back error 3.8°
-/// against about 11° on novel motions), with fewer every tenth frame.
+/// Whether frame `frame` of dataset `dataset` (of `datasets`) is held back to choose the kernel
+/// width: with five or more datasets every fifth *dataset* (whole motions, so that the width is
+/// chosen for motions the regressor has not seen, as at run time; neighbouring frames of one clip
+/// are nearly the same pose, and every tenth frame held back rewarded memorising them: held-back
+/// error 3.8° for a regressor making about 11° on novel motions), with fewer every tenth frame.
+fn held_back(dataset: usize, datasets: usize, frame: usize) -> bool {
+    if datasets >= 5 {
+        dataset % 5 == 4
+    } else {
+        frame % 10 == 9
+    }
+}
+
+/// Descriptors and pose vectors of training datasets, some held back ([`held_back`]).
 struct TrainingData {
     x: Vec<f32>,
     y: Vec<f32>,
@@ -410,7 +419,6 @@ impl TrainingData {
             outputs: 0,
         };
         for (d, dir) in data.iter().enumerate() {
-            let hold_dataset = data.len() >= 5 && d % 5 == 4;
             let dataset = Dataset::open(dir)?;
             let (x, y, n) = training_set(&dataset, suit, codebooks, kind, segmenter)?;
             if n == 0 {
@@ -422,12 +430,7 @@ impl TrainingData {
                 .zip(y.chunks_exact(set.outputs))
                 .enumerate()
             {
-                let held = if data.len() >= 5 {
-                    hold_dataset
-                } else {
-                    k % 10 == 9
-                };
-                let (tx, ty) = if held {
+                let (tx, ty) = if held_back(d, data.len(), k) {
                     (&mut set.held_x, &mut set.held_y)
                 } else {
                     (&mut set.x, &mut set.y)
@@ -1032,5 +1035,21 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::held_back;
+
+    #[test]
+    fn whole_datasets_are_held_back_when_there_are_five_or_more() {
+        // 21 datasets: the 5th, 10th, 15th and 20th, every frame of them.
+        let held: Vec<usize> = (0..21).filter(|&d| held_back(d, 21, 0)).collect();
+        assert_eq!(held, vec![4, 9, 14, 19]);
+        assert!((0..300).all(|k| held_back(9, 21, k) && !held_back(8, 21, k)));
+        // Three datasets: every tenth frame of each.
+        let frames: Vec<usize> = (0..30).filter(|&k| held_back(1, 3, k)).collect();
+        assert_eq!(frames, vec![9, 19, 29]);
     }
 }
