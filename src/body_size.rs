@@ -17,7 +17,7 @@
 
 use glam::{Affine3A, Vec3};
 
-use crate::body::{Body, Material, PartMesh, Subject, BASE_HEIGHT_CM};
+use crate::body::{Body, PartMesh, Subject, BASE_HEIGHT_CM};
 use crate::camera::Camera;
 use crate::mask::Mask;
 use crate::raster::{draw_triangle, Cull, DepthBuffer, ScreenVertex};
@@ -122,23 +122,13 @@ pub struct BodyMasker {
 }
 
 impl BodyMasker {
-    /// Every part: for silhouettes that include head, hands and shoes (ground-truth masks).
+    /// Every part of `body`: the silhouettes it is compared with (ground-truth masks, and the
+    /// segmenter's, which attach head, hands and shoes to the suit) include them.
     pub fn new(body: &Body) -> BodyMasker {
-        BodyMasker::of_parts(body, |_| true)
-    }
-
-    /// Only the suit-covered parts: for masks of the suit alone (the segmenter's before its model
-    /// version 6, which missed the skin and the shoes).
-    pub fn suit_only(body: &Body) -> BodyMasker {
-        BodyMasker::of_parts(body, |p| p.material == Material::Suit)
-    }
-
-    fn of_parts(body: &Body, keep: impl Fn(&crate::body::BodyPart) -> bool) -> BodyMasker {
         BodyMasker {
             parts: body
                 .parts
                 .iter()
-                .filter(|p| keep(p))
                 .map(|p| (p.joint, p.mesh(16, 4.0)))
                 .collect(),
             projected: Vec::new(),
@@ -180,22 +170,13 @@ pub struct BodySizeEstimator {
     girths: Vec<f32>,
     depth: Option<DepthBuffer>,
     masker: Option<BodyMasker>,
-    suit_only: bool,
 }
 
 impl BodySizeEstimator {
-    /// For silhouettes of the whole person (ground-truth masks, and the segmenter's).
+    /// For silhouettes of the whole person (ground-truth masks, and the segmenter's, which attach
+    /// head, hands and shoes to the suit).
     pub fn new() -> BodySizeEstimator {
         BodySizeEstimator::default()
-    }
-
-    /// For silhouettes of the suit only (the segmenter's before its model version 6): the template
-    /// body is compared without its head, hands and shoes.
-    pub fn for_suit_silhouettes() -> BodySizeEstimator {
-        BodySizeEstimator {
-            suit_only: true,
-            ..BodySizeEstimator::default()
-        }
     }
 
     /// Adds one frame: the person's `silhouette` and the template `body` posed by `frame` (channel
@@ -214,14 +195,7 @@ impl BodySizeEstimator {
         let depth = self
             .depth
             .get_or_insert_with(|| DepthBuffer::new(silhouette.width(), silhouette.height()));
-        let suit_only = self.suit_only;
-        let masker = self.masker.get_or_insert_with(|| {
-            if suit_only {
-                BodyMasker::suit_only(body)
-            } else {
-                BodyMasker::new(body)
-            }
-        });
+        let masker = self.masker.get_or_insert_with(|| BodyMasker::new(body));
         let model = masker.mask(&world, camera, depth);
         match frame_ratios(silhouette, &model) {
             Some((s, g)) => {

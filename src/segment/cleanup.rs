@@ -110,8 +110,6 @@ pub fn keep_person_region(
     let mut keep = vec![false; stats.len()];
     if let Some(best) = best {
         keep[best] = true;
-        let main: Vec<bool> = ids.iter().map(|&id| id == best as u32).collect();
-        let pixels = (reach * region_height(&main, width) as f32).ceil() as usize;
         let density = |c: usize| scores[c] / stats[c].0 as f32;
         let marker_share = |c: usize| markers[c] as f32 / stats[c].0 as f32;
         let candidate = |c: usize| {
@@ -120,8 +118,11 @@ pub fn keep_person_region(
                 && density(c) >= 0.5 * density(best)
                 && marker_share(c) >= 0.5 * marker_share(best)
         };
-        let mut distance = Vec::new();
-        if pixels > 0 && (0..stats.len()).any(candidate) {
+        // The main region's own mask and distance map, only when some piece could be kept.
+        if reach > 0.0 && (0..stats.len()).any(candidate) {
+            let main: Vec<bool> = ids.iter().map(|&id| id == best as u32).collect();
+            let pixels = (reach * region_height(&main, width) as f32).ceil() as usize;
+            let mut distance = Vec::new();
             if let Some(b) = distance_near(&main, width, height, pixels, &mut distance) {
                 for y in b.y0..b.y1 {
                     for x in b.x0..b.x1 {

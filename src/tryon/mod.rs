@@ -97,9 +97,6 @@ pub struct ClothOptions {
     pub known_size: Option<BodySize>,
     /// Garment edge length instead of the mode's (cm).
     pub edge_cm: Option<f32>,
-    /// The silhouettes cover the whole person (ground-truth masks, and the segmenter's since its
-    /// model version 6 attaches head, hands and shoes), not only the suit (earlier segmenters).
-    pub whole_person_silhouettes: bool,
 }
 
 impl ClothOptions {
@@ -114,7 +111,6 @@ impl ClothOptions {
             },
             known_size: None,
             edge_cm: None,
-            whole_person_silhouettes: true,
         }
     }
 
@@ -216,17 +212,12 @@ impl ClothStage {
     /// A cloth stage for poses on `template` (the regressor's skeleton, or a mocap clip's).
     pub fn new(template: &Skeleton, options: ClothOptions) -> Result<ClothStage, TryOnError> {
         let template_body = crate::body_size::template_body(template)?;
-        let sizer = if options.whole_person_silhouettes {
-            BodySizeEstimator::new()
-        } else {
-            BodySizeEstimator::for_suit_silhouettes()
-        };
         Ok(ClothStage {
             size: options.known_size,
             options,
             template: template.clone(),
             template_body,
-            sizer,
+            sizer: BodySizeEstimator::new(),
             simulation: None,
             last: None,
             missing: 0,
