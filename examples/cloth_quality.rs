@@ -4,10 +4,13 @@
 //! Prints `run_motion`'s summary for walk 02_01 and kick 10_03, T-shirt and dress at about 2,000
 //! and 4,000 vertices (the same cases as `cargo bench --bench cloth`). With `-v`, also where the
 //! worst frame's top 5 % of edges lie: stretched or compressed, rest length, nearest body part,
-//! height band. The filter keeps the cases whose name (`kick/dress/4000`, …) contains it.
+//! height band; how many frames have a largest strain above 5 / 10 / 20 %; and, in the frame with
+//! the largest strain, the edges above 10 % with the two capsules nearest each end (signed
+//! distance, cm). The filter keeps the cases whose name (`kick/dress/4000`, …) contains it.
 //!
 //! Environment overrides of the live settings, for experiments: `CLOTH_SUBSTEPS`, `CLOTH_SWEEPS`,
-//! `CLOTH_RHO` (Chebyshev ρ, 0 = plain sweeps), `CLOTH_COMPRESSION`, `CLOTH_TETHER_SLACK`,
+//! `CLOTH_RHO` (Chebyshev ρ, 0 = plain sweeps), `CLOTH_LIMIT` (strain limit, 0 = off),
+//! `CLOTH_COMPRESSION`, `CLOTH_TETHER_SLACK`,
 //! `CLOTH_TAU` (loose-anchor time constant, s), `CLOTH_BEND_SCALE` (× the bending compliance),
 //! `CLOTH_COUNTS` (vertex counts, e.g. `2500,3300`), `CLOTH_MATERIAL` (a preset name, default
 //! medium). The frames/s printed are from `run_motion`'s
@@ -59,6 +62,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(v) = env("CLOTH_RHO") {
         settings.chebyshev_rho = v;
     }
+    if let Some(v) = env("CLOTH_LIMIT") {
+        settings.strain_limit = v;
+    }
     if let Some(v) = env("CLOTH_COMPRESSION") {
         settings.compression = v;
     }
@@ -88,7 +94,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let mut cloth = Cloth::new(&mesh, &material, &settings, &rig)?;
                 let mut worst: (f32, usize, Vec<Vec3A>, Vec<Capsule>) =
                     (0.0, 0, Vec::new(), Vec::new());
+                let mut peak: (f32, usize, Vec<Vec3A>, Vec<Capsule>) =
+                    (0.0, 0, Vec::new(), Vec::new());
+                let mut maxima = Vec::new();
                 let summary = run_motion(&rig, &mut cloth, &frames, |k, c, q| {
+                    if k > 0 {
+                        maxima.push(q.strain_max);
+                    }
+                    if k > 0 && q.strain_max > peak.0 {
+                        peak = (
+                            q.strain_max,
+                            k,
+                            c.positions().to_vec(),
+                            c.pose().capsules.clone(),
+                        );
+                    }
                     if k > 0 && q.strain_p95 > worst.0 {
                         worst = (
                             q.strain_p95,
@@ -99,15 +119,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     }
                 })?;
                 println!(
-                    "{case:22} p95 {:.2} / {:.2} %  max {:5.1} %  pen {:.2} mm  {:.0} fps",
+                    "{case:22} p95 {:.2} / {:.2} %  max {:5.2} %  stretch p95 {:.2} max {:5.1} %  pen {:.2} mm  {:.0} fps",
                     100.0 * summary.strain_p95_worst,
                     100.0 * summary.strain_p95_mean,
                     100.0 * summary.strain_max,
+                    100.0 * summary.stretch_p95_worst,
+                    100.0 * summary.stretch_max,
                     10.0 * summary.penetration_max_cm,
                     summary.frames_per_second()
                 );
                 if verbose {
                     describe_top(&rig, &cloth, &mesh, worst.1, &worst.2, &worst.3);
+                    let over = |t: f32| maxima.iter().filter(|&&m| m > t).count();
+                    println!(
+                        "   frames with max > 5 / 10 / 20 %: {} / {} / {} of {}",
+                        over(0.05),
+                        over(0.10),
+                        over(0.20),
+                        maxima.len()
+                    );
+                    describe_peak(&rig, &cloth, &mesh, peak.1, &peak.2, &peak.3);
                 }
             }
         }
@@ -214,6 +245,59 @@ fn describe_top(
             p.x,
             p.y,
             p.z
+        );
+    }
+}
+
+/// The edges above 10 % strain in the frame of the largest strain, with the capsules their ends
+/// are nearest to and how deep.
+fn describe_peak(
+    rig: &BodyRig,
+    cloth: &Cloth,
+    mesh: &GarmentMesh,
+    frame: usize,
+    x: &[Vec3A],
+    capsules: &[Capsule],
+) {
+    let rest = cloth.rest_positions();
+    let edges = unique_edges(&mesh.triangles);
+    let nearest = |p: Vec3A| {
+        let mut d: Vec<(f32, &str)> = rig
+            .proxies()
+            .iter()
+            .zip(capsules)
+            .map(|(pc, cap)| {
+                (
+                    cap.signed_distance(p.into()),
+                    rig.body().parts[pc.part].name,
+                )
+            })
+            .collect();
+        d.sort_by(|a, b| a.0.total_cmp(&b.0));
+        format!("{} {:+.2} / {} {:+.2}", d[0].1, d[0].0, d[1].1, d[1].0)
+    };
+    let mut over: Vec<(f32, usize, usize)> = edges
+        .iter()
+        .filter_map(|&[i, j]| {
+            let (i, j) = (i as usize, j as usize);
+            let l0 = rest[i].distance(rest[j]);
+            let s = (x[i].distance(x[j]) - l0) / l0;
+            (s.abs() > 0.10).then_some((s, i, j))
+        })
+        .collect();
+    over.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
+    println!("   peak frame {frame}: {} edges over 10 %", over.len());
+    for &(s, i, j) in over.iter().take(12) {
+        let p = (rest[i] + rest[j]) * 0.5;
+        println!(
+            "     {:+.1} % {i}-{j} rest {:.2} cm at ({:.0}, {:.0}, {:.0}); ends: {} | {}",
+            100.0 * s,
+            rest[i].distance(rest[j]),
+            p.x,
+            p.y,
+            p.z,
+            nearest(x[i]),
+            nearest(x[j])
         );
     }
 }

@@ -16,7 +16,11 @@
 //!   the back along a half-ellipse over the shoulder, as low as clears the capsules; the columns
 //!   within the neck's reach stay open: the neck hole. A short sleeve tube is welded to each armhole
 //!   (its first ring *is* the armhole's boundary loop, so the mesh is one connected piece) and
-//!   blends in two rings to a circle around the upper arm, ending about half-way to the elbow.
+//!   blends in two rings to a circle around the upper arm, ending about half-way to the elbow. The
+//!   sleeve's vertices are evenly spaced along the armhole and, on the circle, evenly in angle:
+//!   kept at the armhole's directions from the arm's axis (an armhole is taller than it is deep,
+//!   so equal arcs subtend unequal angles), the circle crowded them at the armpit's corners into
+//!   edges a fifth of the usual length, which the solver squashed and tore.
 //! - **Skirt.** Rings from the waist (70 % of the way from the hip joint to the abdomen joint) to just
 //!   above the knees, flaring by 12° and never narrower than the hips and thighs below; each ring has
 //!   as many vertices as its perimeter needs, and neighbouring rings are stitched by walking both in
@@ -790,6 +794,22 @@ fn build_sleeve(
         })
         .collect();
     let ring_at: Vec<f64> = (0..around).map(|k| k as f64 / around as f64).collect();
+    // The circle's vertices: as many directions from the sleeve's axis as samples, evenly spread
+    // in angle from the start that best matches the samples' own directions (the samples are even
+    // in arc length along the armhole, which is no circle).
+    let u = d.any_orthonormal_vector();
+    let w = d.cross(u);
+    let sample_angles: Vec<f32> = samples
+        .iter()
+        .map(|&q| {
+            let r = radial_of(q) - centre;
+            r.dot(w).atan2(r.dot(u))
+        })
+        .collect();
+    let even_dirs: Vec<Vec3> = even_angles(&sample_angles)
+        .into_iter()
+        .map(|a| u * a.cos() + w * a.sin())
+        .collect();
     let mut previous: Vec<u32> = armhole.to_vec();
     let mut previous_at = loop_at;
     for j in 1..=rings {
@@ -798,9 +818,9 @@ fn build_sleeve(
         let radius = mean_radius + (end_radius - mean_radius) * j as f32 / rings as f32;
         let ring: Vec<u32> = samples
             .iter()
-            .map(|&q| {
+            .zip(&even_dirs)
+            .map(|(&q, &dir)| {
                 let (a, r) = (axial_of(q), radial_of(q));
-                let dir = (r - centre).normalize_or(d.any_orthonormal_vector());
                 b.vertex(shoulder + d * (a + (along - a) * f) + r.lerp(dir * radius, f))
             })
             .collect();
@@ -808,6 +828,33 @@ fn build_sleeve(
         previous = ring;
         previous_at = ring_at.clone();
     }
+}
+
+/// Angles spaced evenly around the circle, as many as `angles` (directions in order around a
+/// loop, radians), turning the same way and starting where the mean offset from them is zero.
+fn even_angles(angles: &[f32]) -> Vec<f32> {
+    let mut unwrapped: Vec<f32> = Vec::with_capacity(angles.len());
+    for &a in angles {
+        let mut a = a;
+        if let Some(&last) = unwrapped.last() {
+            a -= TAU * ((a - last) / TAU).round();
+        }
+        unwrapped.push(a);
+    }
+    let (Some(&first), Some(&last)) = (unwrapped.first(), unwrapped.last()) else {
+        return Vec::new();
+    };
+    let turn = if last >= first { 1.0 } else { -1.0 };
+    let step = turn * TAU / unwrapped.len() as f32;
+    let start = unwrapped
+        .iter()
+        .enumerate()
+        .map(|(k, a)| a - step * k as f32)
+        .sum::<f32>()
+        / unwrapped.len() as f32;
+    (0..unwrapped.len())
+        .map(|k| start + step * k as f32)
+        .collect()
 }
 
 /// Torso z centre: the middle of the discs' front-to-back extent over the given heights.
@@ -1203,6 +1250,23 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn even_angles_spread_crowded_directions_around_the_circle() {
+        // Four directions crowded at 0, 10°, 20° and 180° (wrapping through ±π): even would be
+        // 90° apart, turning anticlockwise, starting at the mean offset (0 + 10 + 20 + 180
+        // − 0 − 90 − 180 − 270)/4 = −82.5°.
+        let deg = |d: f32| d.to_radians();
+        let even = even_angles(&[deg(0.0), deg(10.0), deg(20.0), deg(-180.0)]);
+        let expected = [-82.5, 7.5, 97.5, 187.5].map(deg);
+        for (a, e) in even.iter().zip(expected) {
+            assert!((a - e).abs() < 1e-4, "{even:?}");
+        }
+        // Clockwise loops stay clockwise; nothing in, nothing out.
+        let cw = even_angles(&[deg(0.0), deg(-90.0), deg(-180.0), deg(90.0)]);
+        assert!((cw[1] - cw[0] + deg(90.0)).abs() < 1e-4, "{cw:?}");
+        assert!(even_angles(&[]).is_empty());
+    }
+
+    #[test]
     fn fitted_ellipse_contains_the_discs() {
         let discs = vec![(Vec2::new(-5.0, 0.0), 11.0), (Vec2::new(5.0, 0.0), 11.0)];
         let semi = fit_ellipse(&discs, 0.0).expect("fit");
@@ -1256,6 +1320,19 @@ pub(crate) mod tests {
             "{}: {outward} of {} outward",
             mesh.name,
             mesh.triangles.len()
+        );
+        // No slivers: the shortest edge at least 0.4 of the mean (the sleeve join once made
+        // edges a fifth of the mean, which the solver squashed by half).
+        let lengths: Vec<f32> = unique_edges(&mesh.triangles)
+            .iter()
+            .map(|&[i, j]| mesh.positions[i as usize].distance(mesh.positions[j as usize]))
+            .collect();
+        let mean = lengths.iter().sum::<f32>() / lengths.len() as f32;
+        let shortest = lengths.iter().copied().fold(f32::INFINITY, f32::min);
+        assert!(
+            shortest >= 0.4 * mean,
+            "{}: {shortest} of {mean}",
+            mesh.name
         );
         // Clear of the body at rest.
         for p in &mesh.positions {
