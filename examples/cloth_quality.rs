@@ -92,30 +92,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }
                 let (mesh, _) = GarmentMesh::with_vertex_count(kind, &rig, target, 2.5)?;
                 let mut cloth = Cloth::new(&mesh, &material, &settings, &rig)?;
-                let mut worst: (f32, usize, Vec<Vec3A>, Vec<Capsule>) =
-                    (0.0, 0, Vec::new(), Vec::new());
-                let mut peak: (f32, usize, Vec<Vec3A>, Vec<Capsule>) =
-                    (0.0, 0, Vec::new(), Vec::new());
+                let (mut worst, mut peak) = (Snapshot::default(), Snapshot::default());
                 let mut maxima = Vec::new();
                 let summary = run_motion(&rig, &mut cloth, &frames, |k, c, q| {
                     if k > 0 {
                         maxima.push(q.strain_max);
-                    }
-                    if k > 0 && q.strain_max > peak.0 {
-                        peak = (
-                            q.strain_max,
-                            k,
-                            c.positions().to_vec(),
-                            c.pose().capsules.clone(),
-                        );
-                    }
-                    if k > 0 && q.strain_p95 > worst.0 {
-                        worst = (
-                            q.strain_p95,
-                            k,
-                            c.positions().to_vec(),
-                            c.pose().capsules.clone(),
-                        );
+                        peak.keep_if_above(q.strain_max, k, c);
+                        worst.keep_if_above(q.strain_p95, k, c);
                     }
                 })?;
                 println!(
@@ -129,7 +112,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     summary.frames_per_second()
                 );
                 if verbose {
-                    describe_top(&rig, &cloth, &mesh, worst.1, &worst.2, &worst.3);
+                    describe_top(&rig, &cloth, &mesh, &worst);
                     let over = |t: f32| maxima.iter().filter(|&&m| m > t).count();
                     println!(
                         "   frames with max > 5 / 10 / 20 %: {} / {} / {} of {}",
@@ -138,7 +121,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         over(0.20),
                         maxima.len()
                     );
-                    describe_peak(&rig, &cloth, &mesh, peak.1, &peak.2, &peak.3);
+                    describe_peak(&rig, &cloth, &mesh, &peak);
                 }
             }
         }
@@ -146,15 +129,32 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// Where the top 5 % of edges of one frame lie.
-fn describe_top(
-    rig: &BodyRig,
-    cloth: &Cloth,
-    mesh: &GarmentMesh,
+/// A frame kept for the verbose report: the figure it was kept for, its index, the cloth's
+/// positions and the posed capsules.
+#[derive(Default)]
+struct Snapshot {
+    value: f32,
     frame: usize,
-    x: &[Vec3A],
-    capsules: &[Capsule],
-) {
+    x: Vec<Vec3A>,
+    capsules: Vec<Capsule>,
+}
+
+impl Snapshot {
+    fn keep_if_above(&mut self, value: f32, frame: usize, cloth: &Cloth) {
+        if value > self.value {
+            *self = Snapshot {
+                value,
+                frame,
+                x: cloth.positions().to_vec(),
+                capsules: cloth.pose().capsules.clone(),
+            };
+        }
+    }
+}
+
+/// Where the top 5 % of edges of one frame lie.
+fn describe_top(rig: &BodyRig, cloth: &Cloth, mesh: &GarmentMesh, at: &Snapshot) {
+    let (frame, x, capsules) = (at.frame, &at.x, &at.capsules);
     let rest = cloth.rest_positions();
     let edges = unique_edges(&mesh.triangles);
     let mut strains: Vec<(f32, usize)> = edges
@@ -251,14 +251,8 @@ fn describe_top(
 
 /// The edges above 10 % strain in the frame of the largest strain, with the capsules their ends
 /// are nearest to and how deep.
-fn describe_peak(
-    rig: &BodyRig,
-    cloth: &Cloth,
-    mesh: &GarmentMesh,
-    frame: usize,
-    x: &[Vec3A],
-    capsules: &[Capsule],
-) {
+fn describe_peak(rig: &BodyRig, cloth: &Cloth, mesh: &GarmentMesh, at: &Snapshot) {
+    let (frame, x, capsules) = (at.frame, &at.x, &at.capsules);
     let rest = cloth.rest_positions();
     let edges = unique_edges(&mesh.triangles);
     let nearest = |p: Vec3A| {
