@@ -4,34 +4,50 @@
 //! suit's `hue_tolerance_deg` of the colour's hue, with saturation and value above the suit's gates,
 //! so the yellowish-green cloth and dark or washed-out pixels are not markers), through one
 //! 256 KB table from the pixel's 6-bit-per-channel RGB to its label. Pixels of one colour are
-//! grouped into 4-connected components; a component is a marker when
+//! grouped into 4-connected fragments; fragments of one colour that touch corner to corner are one
+//! component unless both are already a quarter of a marker's apparent square or more (a marker
+//! seen edge-on is a diagonal strip one pixel thick, which 4-connectivity breaks into single
+//! pixels; a splinter of a blurred rim joins its marker; two markers that a blurred pixel bridges
+//! stay two). A component is a marker when
 //!
 //! - its area fits a 4 × 4 cm square at the person's apparent size (estimated from the silhouette
 //!   height for a 170 cm person): from a sliver of one to about four such squares, so that a marker
 //!   cut by an arm or a fold, or seen at a slant, still counts;
+//! - its most saturated pixel reaches half its colour's printed saturation, and for red, whose hue
+//!   gate takes in skin, more than skin's 0.5 (hands next to red markers);
 //! - at least 40 % of its in-mask border is cloth, where a border pixel that is neither cloth nor a
 //!   marker colour (the grey a blurred purple edge makes with the complementary green cloth) is judged
 //!   by the pixel one step further out;
-//! - its most saturated pixel reaches half its colour's printed saturation, and for red, whose hue
-//!   gate takes in skin, more than skin's 0.5 (hands next to red markers).
+//! - its colour does not run on past the mask's edge (the next two pixels out of the mask of its
+//!   colour) along half or more of its whole border: that is background the mask leaked onto and
+//!   cut through (blue background next to cyan markers), where a printed square ends at the cloth.
+//!
+//! [`MarkerDetector::components`] gives every component with the first test it fails, for
+//! diagnosis (`examples/marker_misses.rs`).
 //!
 //! Each marker's centroid, colour and area go to the Feature Context descriptor.
 //!
-//! Measured (2026-12-01) with `suitcap describe --masks … --truth-markers …` on five 640×480
-//! sequences (`suitcap-synth --frames 60 --threads 1 --backgrounds ../shared/backgrounds/photos`,
+//! Measured with `suitcap describe --masks … --truth-markers …` on five 640×480 sequences
+//! (`scripts/eval_markers.sh`: `suitcap-synth --frames 60 --backgrounds ../shared/backgrounds/photos`,
 //! seeds 201–205: walk 08_01 ana, kick 10_03 ben, jump 13_39 chidi, dance 05_12 dana, kick 11_01
-//! emil), recall / precision with ground-truth masks, before → after the grey-rim, saturation and
-//! 40 % border rules: walk 0.973 / 0.990 → 0.972 / 0.991, kick 10 0.932 / 0.994 → 0.938 / 0.993,
-//! jump 0.979 / 0.991 → 0.979 / 0.991, dance 0.931 / 0.994 → 0.933 / 0.994, kick 11 0.894 / 0.998 →
-//! 0.963 / 0.9995 (the old rule lost purple markers whose whole rim is grey). With the segmenter's
-//! masks the precision rises 0.964 → 0.970, 0.927 → 0.955, 0.964 → 0.963, 0.978 → 0.981, 0.997 →
-//! 0.999. The constants were chosen on these same sequences. What is still missed is mostly markers
-//! seen nearly edge-on: markers with no rendered pixel whose four neighbours are the same marker
-//! (at most 2 px thick) are 16 % and 17 % of the counted truth of kick 10 and dance 05 and are found
-//! 0.73 and 0.67 of the time; the rest 0.976 and 0.987. Tried and dropped: splitting large components into
-//! their saturated cores (recall +0.1–0.3 points, precision −1 point), taking the cloth's colour out
-//! of grey and brownish pixels before the hue test (precision with segmenter masks 0.82–0.97),
-//! one-pixel markers and a 15 % border share (precision down, recall unchanged).
+//! emil), recall / precision with ground-truth masks, before → after the corner joining and the
+//! run-on rule (2026-12-02): walk 0.972 / 0.991 → 0.973 / 0.994, kick 10 0.938 / 0.993 → 0.945 /
+//! 0.996, jump 0.979 / 0.991 → 0.978 / 0.997, dance 0.933 / 0.994 → 0.933 / 0.997, kick 11 0.963 /
+//! 0.9995 → 0.959 / 0.9998; with the segmenter's masks 0.967 / 0.963 → 0.964 / 0.971, 0.937 / 0.951
+//! → 0.939 / 0.961, 0.968 / 0.962 → 0.967 / 0.980, 0.930 / 0.914 → 0.927 / 0.966, 0.953 / 0.999 →
+//! 0.951 / 0.9996. The previous session's grey-rim, saturation and 40 % border rules had raised
+//! kick 11's recall 0.894 → 0.963 (the old rule lost purple markers whose whole rim is grey). The
+//! constants were chosen on these same sequences. What is still missed with ground-truth masks is
+//! mostly markers seen edge-on whose thin strip blends with the cloth into grey or brown that fails
+//! the gates, leaving a component of a pixel or two; with the segmenter's masks the false markers
+//! are background inside the leaked mask, about half of them on its edge. Tried and dropped:
+//! splitting large components into their saturated cores (recall +0.1–0.3 points, precision −1
+//! point), taking the cloth's colour out of grey and brownish pixels before the hue test (precision
+//! with segmenter masks 0.82–0.97), one-pixel markers and a 15 % border share (precision down,
+//! recall unchanged), full 8-connectivity (jump 13's recall 0.979 → 0.968: neighbouring markers
+//! bridged by a blurred pixel), rejecting components with 60 % of their border on the mask's edge
+//! (a third of the false markers with segmenter masks, but 205 true ones) and a run-on test of one
+//! pixel past the edge (blur carries a marker's colour that far past a ground-truth mask).
 
 use glam::Vec2;
 use image::RgbImage;
@@ -66,14 +82,22 @@ pub struct MarkerDetector {
     marker_size_cm: f32,
     /// Per marker colour: the saturation (0–255) a component's most saturated pixel must reach.
     min_peak_sat: Vec<u8>,
-    labels: Vec<u8>,
-    stack: Vec<usize>,
+    scratch: Scratch,
 }
 
-const NONE: u8 = u8::MAX;
-const SEEN: u8 = u8::MAX - 1;
-const CLOTH: u8 = u8::MAX - 2;
-const OUTSIDE: u8 = u8::MAX - 3;
+/// Pixel labels besides the marker colour indices (which are below all of them).
+const NONE: u8 = 0x7f;
+const CLOTH: u8 = 0x7e;
+/// Set on the label of a pixel outside the mask (whose colour is still looked at).
+const OUTSIDE: u8 = 0x80;
+/// Pixels looked at around the mask's bounding box.
+const MARGIN: u32 = 2;
+/// A pixel that belongs to no fragment (yet).
+const UNSEEN: u32 = u32::MAX;
+/// Share of a component's whole border along which its colour may run on past the mask's edge
+/// (measured on the README's five sequences with the segmenter's masks: at this share 128 of 1,000
+/// false markers and 21 of 35,400 true ones; a quarter of the false ones run on along 40 % or more).
+const MAX_RUN_ON_SHARE: f32 = 0.5;
 /// Share of a marker's in-mask border that must be cloth.
 const MIN_CLOTH_BORDER: f32 = 0.4;
 /// Share of its colour's printed saturation that a marker's most saturated pixel must reach.
@@ -82,6 +106,26 @@ const PEAK_SATURATION_SHARE: f32 = 0.5;
 const SKIN_HUE_DEG: f32 = 20.0;
 /// Skin is at most this saturated (the six subjects' albedos: 0.27–0.50; a red marker's core 0.85).
 const SKIN_MAX_SATURATION: f32 = 0.5;
+const SIDES: [(isize, isize); 4] = [(-1, 0), (1, 0), (0, -1), (0, 1)];
+const CORNERS: [(isize, isize); 4] = [(-1, -1), (1, -1), (-1, 1), (1, 1)];
+
+/// Share of a marker's apparent square below which a fragment is a sliver that joins the fragments
+/// it touches corner to corner (chosen from 0.08, 0.25, 0.5 and 1 on the README's five sequences:
+/// 0.08 kept a third more splinters of blurred rims as false markers, 0.5 and more joined more pairs
+/// of neighbouring markers).
+const SLIVER_SHARE: f32 = 0.25;
+
+/// The area (pixels) below which a fragment is a sliver, for a silhouette `height` pixels tall.
+fn sliver_area(marker_size_cm: f32, height: f32) -> u32 {
+    let side = marker_size_cm * height / ASSUMED_HEIGHT_CM;
+    (SLIVER_SHARE * side * side).ceil() as u32
+}
+
+/// Is a pixel label one of the marker colours?
+#[inline]
+fn is_marker_label(label: u8) -> bool {
+    label < CLOTH
+}
 
 /// The saturation (0–255) a component's most saturated pixel must reach to be a marker of colour
 /// `hsv`: half the printed saturation, so a marker blurred into the cloth still passes, and for a
@@ -104,7 +148,7 @@ impl MarkerDetector {
                 let rgb = [(i >> 12) as u8, (i >> 6) as u8 & 63, i as u8 & 63].map(|c| c << 2);
                 let c = lut.get(rgb);
                 match gate.marker_index(c) {
-                    Some(k) => k as u8,
+                    Some(k) => k.min(CLOTH as usize - 1) as u8,
                     None if gate.is_cloth(c) => CLOTH,
                     None => NONE,
                 }
@@ -120,8 +164,7 @@ impl MarkerDetector {
                 .iter()
                 .map(|m| min_peak_saturation(m.hsv, gates.hue_tolerance_deg))
                 .collect(),
-            labels: Vec::new(),
-            stack: Vec::new(),
+            scratch: Scratch::default(),
         }
     }
 
@@ -143,87 +186,331 @@ impl MarkerDetector {
 
     /// The markers inside `mask` (same size as `frame`). An empty mask gives no markers.
     pub fn detect(&mut self, frame: &RgbImage, mask: &Mask) -> Vec<DetectedMarker> {
+        self.components(frame, mask)
+            .into_iter()
+            .filter(|c| c.verdict == Verdict::Marker)
+            .map(|c| c.marker)
+            .collect()
+    }
+
+    /// Every component of one marker colour inside `mask`, with the tests' verdict on it.
+    pub fn components(&mut self, frame: &RgbImage, mask: &Mask) -> Vec<Component> {
         let Some((x0, y0, x1, y1)) = mask.bounding_box() else {
             return Vec::new();
         };
         if frame.dimensions() != (mask.width(), mask.height()) {
             return Vec::new();
         }
-        let (bw, bh) = ((x1 - x0) as usize, (y1 - y0) as usize);
+        let height = (y1 - y0) as f32;
+        // A margin, so that what lies just past the mask's edge is seen.
+        let (x0, y0) = (x0.saturating_sub(MARGIN), y0.saturating_sub(MARGIN));
+        let (x1, y1) = (
+            (x1 + MARGIN).min(frame.width()),
+            (y1 + MARGIN).min(frame.height()),
+        );
+        let grid = Grid {
+            width: (x1 - x0) as usize,
+            height: (y1 - y0) as usize,
+        };
         let width = frame.width() as usize;
         let raw = frame.as_raw();
         let inside = mask.pixels();
-        self.labels.clear();
-        self.labels.resize(bw * bh, NONE);
-        for y in 0..bh {
+        let labels = &mut self.scratch.labels;
+        labels.clear();
+        labels.reserve(grid.width * grid.height);
+        for y in 0..grid.height {
             let row = (y + y0 as usize) * width + x0 as usize;
-            for x in 0..bw {
-                let i = row + x;
-                self.labels[y * bw + x] = if inside[i] {
-                    let p = i * 3;
-                    let (r, g, b) = (raw[p] as usize, raw[p + 1] as usize, raw[p + 2] as usize);
-                    self.pixel_label[((r >> 2) << 12) | ((g >> 2) << 6) | (b >> 2)]
+            labels.extend((row..row + grid.width).map(|i| {
+                let p = i * 3;
+                let (r, g, b) = (raw[p] as usize, raw[p + 1] as usize, raw[p + 2] as usize);
+                let label = self.pixel_label[((r >> 2) << 12) | ((g >> 2) << 6) | (b >> 2)];
+                if inside[i] {
+                    label
                 } else {
-                    OUTSIDE
-                };
-            }
+                    label | OUTSIDE
+                }
+            }));
         }
-        let (min_area, max_area) = self.area_bounds(bh as f32);
-        let mut markers = Vec::new();
+        let lut = &self.lut;
+        self.scratch.fragments(grid, |i| {
+            let p = ((i / grid.width + y0 as usize) * width + i % grid.width + x0 as usize) * 3;
+            lut.get([raw[p], raw[p + 1], raw[p + 2]]).sat
+        });
+        let bounds = self.area_bounds(height);
+        let offset = Vec2::new(x0 as f32, y0 as f32);
+        self.scratch
+            .join_slivers(grid, sliver_area(self.marker_size_cm, height))
+            .into_iter()
+            .map(|f| {
+                let marker = DetectedMarker {
+                    centre: f.sum / f.area as f32 + offset,
+                    colour: f.colour as usize,
+                    area: f.area,
+                };
+                Component {
+                    marker,
+                    border: f.border,
+                    peak_saturation: f.peak_sat,
+                    verdict: self.verdict(&marker, &f.border, f.peak_sat, bounds),
+                }
+            })
+            .collect()
+    }
+
+    /// Whether a component is a marker, or the first test it fails.
+    fn verdict(
+        &self,
+        marker: &DetectedMarker,
+        border: &Border,
+        peak_sat: u8,
+        (min_area, max_area): (u32, u32),
+    ) -> Verdict {
+        if marker.area < min_area {
+            Verdict::TooSmall
+        } else if marker.area > max_area {
+            Verdict::TooBig
+        } else if self
+            .min_peak_sat
+            .get(marker.colour)
+            .is_none_or(|&min| peak_sat < min)
+        {
+            Verdict::Washed
+        } else if border.inside != 0
+            && (border.cloth as f32) < MIN_CLOTH_BORDER * border.inside as f32
+        {
+            Verdict::OffCloth
+        } else if border.runs_on as f32
+            >= MAX_RUN_ON_SHARE * (border.inside + border.outside) as f32
+            && border.runs_on > 0
+        {
+            Verdict::RunsOffMask
+        } else {
+            Verdict::Marker
+        }
+    }
+}
+
+/// The mask's bounding box, in which the detector works.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    width: usize,
+    height: usize,
+}
+
+impl Grid {
+    /// The index of pixel (`x` + `dx`, `y` + `dy`) of the pixel at `i`, if inside the grid.
+    #[inline]
+    fn step(self, i: usize, (dx, dy): (isize, isize)) -> Option<usize> {
+        let (x, y) = (i % self.width, i / self.width);
+        let (x, y) = (x.checked_add_signed(dx)?, y.checked_add_signed(dy)?);
+        (x < self.width && y < self.height).then(|| y * self.width + x)
+    }
+}
+
+/// A 4-connected run of pixels of one marker colour.
+#[derive(Clone, Copy, Debug)]
+struct Fragment {
+    colour: u8,
+    area: u32,
+    /// Sum of its pixel centres, in the grid's coordinates.
+    sum: Vec2,
+    border: Border,
+    peak_sat: u8,
+    /// Where its pixels start in [`Scratch::order`].
+    first: usize,
+}
+
+impl Fragment {
+    /// Adds another fragment's pixels to this one's statistics.
+    fn absorb(&mut self, other: &Fragment) {
+        self.area += other.area;
+        self.sum += other.sum;
+        self.border.inside += other.border.inside;
+        self.border.cloth += other.border.cloth;
+        self.border.outside += other.border.outside;
+        self.border.runs_on += other.border.runs_on;
+        self.peak_sat = self.peak_sat.max(other.peak_sat);
+    }
+}
+
+/// The detector's per-frame buffers, kept between frames.
+#[derive(Clone, Debug, Default)]
+struct Scratch {
+    /// Per pixel of the grid: a marker colour index, `CLOTH` or `NONE`, with `OUTSIDE` set outside
+    /// the mask.
+    labels: Vec<u8>,
+    /// Per pixel: the index of its fragment in `fragments`, or `UNSEEN`.
+    fragment_of: Vec<u32>,
+    /// Pixel indices, each fragment's contiguous from its `first`.
+    order: Vec<usize>,
+    fragments: Vec<Fragment>,
+    /// Union-find forest over `fragments`, and each root's total area.
+    parent: Vec<u32>,
+    group_area: Vec<u32>,
+    /// Per root fragment: its component's index in the output (`usize::MAX`: none yet).
+    slot: Vec<usize>,
+    stack: Vec<usize>,
+}
+
+impl Scratch {
+    /// Groups the labelled pixels into 4-connected fragments of one colour, with their border (a
+    /// side on a pixel of no colour is judged by the pixel one step further out) and their most
+    /// saturated pixel (`saturation` of a grid index).
+    fn fragments(&mut self, grid: Grid, saturation: impl Fn(usize) -> u8) {
+        self.fragment_of.clear();
+        self.fragment_of.resize(self.labels.len(), UNSEEN);
+        self.order.clear();
+        self.fragments.clear();
         for start in 0..self.labels.len() {
             let colour = self.labels[start];
-            if colour >= OUTSIDE {
+            if !is_marker_label(colour) || self.fragment_of[start] != UNSEEN {
                 continue;
             }
-            let (mut area, mut sum) = (0u32, Vec2::ZERO);
-            let (mut border, mut cloth_border) = (0u32, 0u32);
-            let mut peak_sat = 0u8;
-            self.labels[start] = SEEN;
+            let id = self.fragments.len() as u32;
+            let mut fragment = Fragment {
+                colour,
+                area: 0,
+                sum: Vec2::ZERO,
+                border: Border::default(),
+                peak_sat: 0,
+                first: self.order.len(),
+            };
+            self.fragment_of[start] = id;
             self.stack.push(start);
             while let Some(i) = self.stack.pop() {
-                let (x, y) = (i % bw, i / bw);
-                area += 1;
-                sum += Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                let p = ((y + y0 as usize) * width + x + x0 as usize) * 3;
-                peak_sat = peak_sat.max(self.lut.get([raw[p], raw[p + 1], raw[p + 2]]).sat);
-                for (dx, dy) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
-                    let Some(j) = step(x, y, bw, bh, dx, dy) else {
+                self.order.push(i);
+                fragment.area += 1;
+                let (x, y) = (i % grid.width, i / grid.width);
+                fragment.sum += Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                fragment.peak_sat = fragment.peak_sat.max(saturation(i));
+                for side in SIDES {
+                    let Some(j) = grid.step(i, side) else {
+                        fragment.border.outside += 1;
                         continue;
                     };
                     let label = self.labels[j];
                     if label == colour {
-                        self.labels[j] = SEEN;
-                        self.stack.push(j);
-                    } else if label != SEEN && label != OUTSIDE {
-                        border += 1;
-                        let beyond = if label == NONE {
-                            step(x, y, bw, bh, 2 * dx, 2 * dy).map(|k| self.labels[k])
-                        } else {
-                            None
-                        };
-                        cloth_border += (label == CLOTH || beyond == Some(CLOTH)) as u32;
+                        if self.fragment_of[j] == UNSEEN {
+                            self.fragment_of[j] = id;
+                            self.stack.push(j);
+                        }
+                    } else if label & OUTSIDE != 0 {
+                        fragment.border.outside += 1;
+                        let further = grid
+                            .step(i, (2 * side.0, 2 * side.1))
+                            .map(|k| self.labels[k]);
+                        fragment.border.runs_on +=
+                            (label == colour | OUTSIDE && further == Some(colour | OUTSIDE)) as u32;
+                    } else {
+                        fragment.border.inside += 1;
+                        let beyond = (label == NONE)
+                            .then(|| grid.step(i, (2 * side.0, 2 * side.1)))
+                            .flatten()
+                            .map(|k| self.labels[k]);
+                        fragment.border.cloth += (label == CLOTH || beyond == Some(CLOTH)) as u32;
                     }
                 }
             }
-            let on_cloth = border == 0 || cloth_border as f32 >= MIN_CLOTH_BORDER * border as f32;
-            let saturated = peak_sat >= self.min_peak_sat[colour as usize];
-            if on_cloth && saturated && (min_area..=max_area).contains(&area) {
-                markers.push(DetectedMarker {
-                    centre: sum / area as f32 + Vec2::new(x0 as f32, y0 as f32),
-                    colour: colour as usize,
-                    area,
-                });
+            self.fragments.push(fragment);
+        }
+    }
+
+    /// The fragments as components: fragments that touch corner to corner are one component
+    /// unless both sides are already `sliver_area` pixels or more. So a marker seen edge-on, a strip
+    /// one pixel thick running diagonally, is not broken into single pixels, and a splinter of a
+    /// marker's blurred rim joins it, but two markers that a blurred pixel bridges stay apart.
+    fn join_slivers(&mut self, grid: Grid, sliver_area: u32) -> Vec<Fragment> {
+        self.parent.clear();
+        self.parent.extend(0..self.fragments.len() as u32);
+        self.group_area.clear();
+        self.group_area
+            .extend(self.fragments.iter().map(|f| f.area));
+        for (f, fragment) in self.fragments.iter().enumerate() {
+            let pixels = &self.order[fragment.first..fragment.first + fragment.area as usize];
+            for &i in pixels {
+                for corner in CORNERS {
+                    let Some(j) = grid.step(i, corner) else {
+                        continue;
+                    };
+                    if self.labels[j] != fragment.colour || self.fragment_of[j] == f as u32 {
+                        continue;
+                    }
+                    let a = find(&mut self.parent, f as u32);
+                    let b = find(&mut self.parent, self.fragment_of[j]);
+                    let (area_a, area_b) = (self.group_area[a], self.group_area[b]);
+                    if a != b && area_a.min(area_b) < sliver_area {
+                        let (root, child) = if area_a >= area_b { (a, b) } else { (b, a) };
+                        self.parent[child] = root as u32;
+                        self.group_area[root] = area_a + area_b;
+                    }
+                }
             }
         }
-        markers
+        self.slot.clear();
+        self.slot.resize(self.fragments.len(), usize::MAX);
+        let mut components: Vec<Fragment> = Vec::with_capacity(self.fragments.len());
+        for f in 0..self.fragments.len() {
+            let root = find(&mut self.parent, f as u32);
+            match self.slot[root] {
+                usize::MAX => {
+                    self.slot[root] = components.len();
+                    components.push(self.fragments[f]);
+                }
+                slot => components[slot].absorb(&self.fragments[f]),
+            }
+        }
+        components
     }
 }
 
-/// The index of pixel (`x` + `dx`, `y` + `dy`) in a `bw` × `bh` grid, if inside it.
-#[inline]
-fn step(x: usize, y: usize, bw: usize, bh: usize, dx: isize, dy: isize) -> Option<usize> {
-    let (x, y) = (x.checked_add_signed(dx)?, y.checked_add_signed(dy)?);
-    (x < bw && y < bh).then(|| y * bw + x)
+/// The root of `i`'s set in a union-find forest, halving the path on the way.
+fn find(parent: &mut [u32], mut i: u32) -> usize {
+    while parent[i as usize] != i {
+        let grandparent = parent[parent[i as usize] as usize];
+        parent[i as usize] = grandparent;
+        i = grandparent;
+    }
+    i as usize
+}
+
+/// What a component's 4-neighbours of another label are: counts of pixel sides.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Border {
+    /// Sides on a pixel inside the mask.
+    pub inside: u32,
+    /// Of those, sides on cloth (directly, or one step further out past a pixel of no colour).
+    pub cloth: u32,
+    /// Sides on the mask's outside.
+    pub outside: u32,
+    /// Of those, sides whose next two pixels out are of the component's own colour: the colour runs
+    /// on past the mask (one pixel is not enough: blur spreads a marker's colour that far).
+    pub runs_on: u32,
+}
+
+/// The detector's verdict on a component: a marker, or the first test it fails.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    Marker,
+    TooSmall,
+    TooBig,
+    /// Its most saturated pixel is too pale for its colour.
+    Washed,
+    /// Too little of its in-mask border is cloth.
+    OffCloth,
+    /// Its colour runs on past the mask's edge along half its border or more: background that the
+    /// mask leaked onto and cut through, not a square printed on the suit.
+    RunsOffMask,
+}
+
+/// One connected component of a marker colour, with what the tests looked at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Component {
+    /// Centroid, colour and area, as reported when it is a marker.
+    pub marker: DetectedMarker,
+    pub border: Border,
+    /// Its most saturated pixel's saturation (0–255).
+    pub peak_saturation: u8,
+    pub verdict: Verdict,
 }
 
 /// A marker the generator says is visible, for scoring detections.
@@ -450,6 +737,77 @@ mod tests {
         assert_eq!(detector.detect(&frame, &mask).len(), 3);
         assert_eq!(min_peak_saturation(suit().markers[0].hsv, 35.0), 128);
         assert_eq!(min_peak_saturation(suit().markers[1].hsv, 35.0), 102);
+    }
+
+    #[test]
+    fn a_diagonal_strip_one_pixel_thick_is_one_marker() {
+        // A marker seen edge-on: six red pixels corner to corner, each its own 4-connected
+        // fragment and smaller than the 2-pixel minimum alone.
+        let (mut frame, mask) = fixture();
+        for k in 0..6 {
+            frame.put_pixel(20 + k, 60 + k, image::Rgb([204, 31, 31]));
+        }
+        let mut detector = MarkerDetector::new(&suit());
+        let found = detector.detect(&frame, &mask);
+        assert_eq!(found.len(), 4, "{found:?}");
+        let strip = found
+            .iter()
+            .find(|m| m.area == 6)
+            .expect("the strip is one marker");
+        assert_eq!(strip.colour, 0);
+        assert!(
+            strip.centre.distance(Vec2::new(23.0, 63.0)) < 1e-4,
+            "{strip:?}"
+        );
+    }
+
+    #[test]
+    fn a_splinter_joins_its_marker_but_two_markers_stay_apart() {
+        let (mut frame, mask) = fixture();
+        // One pixel of the purple marker's blurred rim, touching its corner.
+        frame.put_pixel(24, 104, image::Rgb([100, 55, 158]));
+        // Two red markers touching corner to corner (each 16 pixels, above the 4-pixel sliver size).
+        paint(&mut frame, 12, 130, 4, [204, 31, 31]);
+        paint(&mut frame, 16, 134, 4, [204, 31, 31]);
+        assert_eq!(sliver_area(4.0, 170.0), 4);
+        let mut detector = MarkerDetector::new(&suit());
+        let found = detector.detect(&frame, &mask);
+        assert_eq!(found.len(), 5, "{found:?}");
+        assert!(found.iter().any(|m| m.colour == 2 && m.area == 17));
+        assert_eq!(found.iter().filter(|m| m.area == 16).count(), 4);
+    }
+
+    #[test]
+    fn a_blob_whose_colour_runs_on_past_the_mask_is_background() {
+        let (mut frame, mask) = fixture();
+        let mut detector = MarkerDetector::new(&suit());
+        // A cyan square in the mask's top right corner (x 46–49, y 5–8) over grey background is a
+        // marker cut by the silhouette.
+        paint(&mut frame, 46, 5, 4, [38, 191, 191]);
+        assert_eq!(detector.detect(&frame, &mask).len(), 4);
+        // The same square where cyan background continues above and right of the mask: half its
+        // border runs on, so it is background the mask cut through.
+        for y in 1..9 {
+            for x in 46..54 {
+                frame.put_pixel(x, y, image::Rgb([38, 191, 191]));
+            }
+        }
+        let components = detector.components(&frame, &mask);
+        let blob = components
+            .iter()
+            .find(|c| c.marker.colour == 1 && c.marker.centre.distance(Vec2::new(48.0, 7.0)) < 1e-4)
+            .expect("the blob");
+        assert_eq!(
+            blob.border,
+            Border {
+                inside: 8,
+                cloth: 8,
+                outside: 8,
+                runs_on: 8
+            }
+        );
+        assert_eq!(blob.verdict, Verdict::RunsOffMask);
+        assert_eq!(detector.detect(&frame, &mask).len(), 3);
     }
 
     #[test]

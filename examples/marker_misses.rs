@@ -1,0 +1,173 @@
+//! Debug aid for the marker detector: why counted truth markers are missed and what the false
+//! detections are, over generated datasets.
+//!
+//! `cargo run --release --example marker_misses -- MASKS_DIR_NAME DATASET [DATASET ...]`
+//! (MASKS_DIR_NAME: `masks` for ground truth, `segmasks` for the segmenter's). Prints per dataset
+//! the recall and precision (as `suitcap describe --truth-markers` scores them), the verdicts of the
+//! nearest same-colour component of each missed marker, and a few traits of the false detections.
+//! `VERBOSE=1` lists every miss and false detection; `DUMP=FILE` appends one CSV row per detection
+//! (dataset, masks, frame, colour, area, border inside / cloth / outside, peak saturation, border
+//! running on past the mask, correct, tolerance, x, y) for looking at the tests' statistics.
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use suitcap::descriptor::markers::{Component, MarkerDetector, Verdict};
+use suitcap::mask::Mask;
+use suitcap::suit::SuitDefinition;
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    anyhow::ensure!(args.len() >= 3, "usage: MASKS_DIR_NAME DATASET...");
+    let suit = SuitDefinition::load_dir(Path::new("suits/default"))?;
+    let mut detector = MarkerDetector::new(&suit);
+    let verbose = std::env::var("VERBOSE").is_ok();
+    for data in &args[2..] {
+        let data = Path::new(data);
+        let text = std::fs::read_to_string(data.join("markers.csv"))?;
+        let truth = suitcap::dataset::markers_from_csv(&text, &data.join("markers.csv"))?;
+        let mut frames: Vec<_> = std::fs::read_dir(data.join("frames"))?
+            .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
+            .collect();
+        frames.sort();
+        let (mut counted, mut found, mut detections, mut correct) = (0, 0, 0, 0);
+        let mut miss_reasons: BTreeMap<String, usize> = BTreeMap::new();
+        let mut false_kinds: BTreeMap<String, usize> = BTreeMap::new();
+        for name in &frames {
+            let index: usize = name.trim_end_matches(".png").parse()?;
+            let img = image::open(data.join("frames").join(name))?.to_rgb8();
+            let mask = Mask::from_gray(&image::open(data.join(&args[1]).join(name))?.to_luma8());
+            let comps = detector.components(&img, &mask);
+            let expected: Vec<_> = truth
+                .iter()
+                .filter(|t| t.frame == index)
+                .filter_map(|t| {
+                    let colour = suit.markers.iter().position(|c| c.name == t.colour)?;
+                    Some((glam::Vec2::new(t.x, t.y), colour, t))
+                })
+                .collect();
+            let side = (expected.iter().map(|t| t.2.visible_px).max().unwrap_or(16) as f32).sqrt();
+            let tol = (0.6 * side).max(2.0);
+            let dets: Vec<&Component> = comps
+                .iter()
+                .filter(|c| c.verdict == Verdict::Marker)
+                .collect();
+            let mut pairs = Vec::new();
+            for (t, e) in expected.iter().enumerate() {
+                for (d, c) in dets.iter().enumerate() {
+                    let dist = c.marker.centre.distance(e.0);
+                    if c.marker.colour == e.1 && dist <= tol {
+                        pairs.push((dist, t, d));
+                    }
+                }
+            }
+            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (mut tm, mut dm) = (vec![false; expected.len()], vec![false; dets.len()]);
+            for (_, t, d) in pairs {
+                if !tm[t] && !dm[d] {
+                    tm[t] = true;
+                    dm[d] = true;
+                }
+            }
+            detections += dets.len();
+            correct += dm.iter().filter(|&&m| m).count();
+            for (t, e) in expected.iter().enumerate() {
+                if e.2.visible_fraction < 0.6 || e.2.visible_px < 6 {
+                    continue;
+                }
+                counted += 1;
+                if tm[t] {
+                    found += 1;
+                    continue;
+                }
+                let near = comps
+                    .iter()
+                    .filter(|c| c.marker.colour == e.1)
+                    .min_by(|a, b| {
+                        a.marker
+                            .centre
+                            .distance(e.0)
+                            .total_cmp(&b.marker.centre.distance(e.0))
+                    });
+                let reason = match near {
+                    None => "no component".to_string(),
+                    Some(c) if c.marker.centre.distance(e.0) > 2.0 * tol => {
+                        "no component within 2 tol".to_string()
+                    }
+                    Some(c) => {
+                        let far = c.marker.centre.distance(e.0) > tol;
+                        format!("{:?}{}", c.verdict, if far { " (off centre)" } else { "" })
+                    }
+                };
+                if verbose {
+                    let nearest = near.map(|c| (c.marker, c.border, c.peak_saturation));
+                    println!(
+                        "miss f{index} {:?} c{} vis {:.2}/{} tol {tol:.1}: {reason} {nearest:?}",
+                        e.0, e.1, e.2.visible_fraction, e.2.visible_px
+                    );
+                }
+                *miss_reasons.entry(reason).or_default() += 1;
+            }
+            if let Ok(path) = std::env::var("DUMP") {
+                use std::io::Write;
+                let mut out = std::fs::OpenOptions::new()
+                    .append(true)
+                    .create(true)
+                    .open(path)?;
+                for (d, c) in dets.iter().enumerate() {
+                    writeln!(
+                        out,
+                        "{},{},{index},{},{},{},{},{},{},{},{},{},{:.1},{:.1}",
+                        data.display(),
+                        args[1],
+                        c.marker.colour,
+                        c.marker.area,
+                        c.border.inside,
+                        c.border.cloth,
+                        c.border.outside,
+                        c.peak_saturation,
+                        c.border.runs_on,
+                        dm[d] as u8,
+                        tol,
+                        c.marker.centre.x,
+                        c.marker.centre.y
+                    )?;
+                }
+            }
+            for (d, c) in dets.iter().enumerate() {
+                if dm[d] {
+                    continue;
+                }
+                let any_truth = expected
+                    .iter()
+                    .filter(|e| e.1 == c.marker.colour)
+                    .map(|e| e.0.distance(c.marker.centre))
+                    .fold(f32::INFINITY, f32::min);
+                let kind = if any_truth <= tol {
+                    "duplicate / partly visible truth"
+                } else if any_truth <= 2.0 * tol {
+                    "off centre"
+                } else if c.border.outside > 0 {
+                    "far, touches mask edge"
+                } else {
+                    "far, inside"
+                };
+                if verbose {
+                    println!(
+                        "false f{index} {:?} {kind} (nearest truth {any_truth:.1}, tol {tol:.1})",
+                        (c.marker, c.border, c.peak_saturation)
+                    );
+                }
+                *false_kinds.entry(kind.to_string()).or_default() += 1;
+            }
+        }
+        println!(
+            "{}: recall {:.4} ({found} of {counted}), precision {:.4} ({correct} of {detections})",
+            data.display(),
+            found as f64 / counted.max(1) as f64,
+            correct as f64 / detections.max(1) as f64
+        );
+        println!("  misses: {miss_reasons:?}");
+        println!("  false: {false_kinds:?}");
+    }
+    Ok(())
+}
