@@ -508,6 +508,12 @@ impl Cloth {
             "0 ≤ ρ < 1",
         )?;
         check(
+            "strain_limit",
+            settings.strain_limit,
+            (0.0..1.0).contains(&settings.strain_limit),
+            "0 (off) ≤ limit < 1",
+        )?;
+        check(
             "loose_anchor_seconds",
             settings.loose_anchor_seconds,
             settings.loose_anchor_seconds >= 0.0 && settings.loose_anchor_seconds.is_finite(),
@@ -1356,36 +1362,33 @@ impl Cloth {
     #[inline(always)]
     fn collide_vertex(&mut self, v: usize, fresh: bool) {
         let offset = self.settings.collision_offset;
-        {
-            let reach2 = self.candidate_reach2[v];
-            if reach2 < 0.0 {
-                return;
-            }
-            let mut p = self.x[v];
-            if fresh {
-                self.contact_normal[v] = Vec3A::ZERO;
-                self.contact_depth[v] = 0.0;
-            }
-            let weight = self.arm_weight[v];
-            let list: &[u16] = if (p - self.candidate_origin[v]).length_squared() <= reach2 {
-                let (a, b) = (
-                    self.candidate_start[v] as usize,
-                    self.candidate_start[v + 1] as usize,
-                );
-                &self.candidates[a..b]
-            } else {
-                &self.all_capsules
-            };
-            // Depenetrate from the trunk; then, for arm cloth not lying on the trunk, from the arms
-            // (by the arm weight), and from the trunk again if an arm pushed it in (the trunk wins
-            // where they overlap). Remember the deepest contact for the velocity update (friction).
-            let mut deepest: Option<(f32, Vec3A, usize)> = None;
-            let mut on_trunk = false;
-            let trunk = |c: &&u16| self.capsule_groups.get(**c as usize) == Some(&GROUP_TRUNK);
-            let resolve = |p: &mut Vec3A,
-                           c: usize,
-                           allowed: f32,
-                           deepest: &mut Option<(f32, Vec3A, usize)>| {
+        let reach2 = self.candidate_reach2[v];
+        if reach2 < 0.0 {
+            return;
+        }
+        let mut p = self.x[v];
+        if fresh {
+            self.contact_normal[v] = Vec3A::ZERO;
+            self.contact_depth[v] = 0.0;
+        }
+        let weight = self.arm_weight[v];
+        let list: &[u16] = if (p - self.candidate_origin[v]).length_squared() <= reach2 {
+            let (a, b) = (
+                self.candidate_start[v] as usize,
+                self.candidate_start[v + 1] as usize,
+            );
+            &self.candidates[a..b]
+        } else {
+            &self.all_capsules
+        };
+        // Depenetrate from the trunk; then, for arm cloth not lying on the trunk, from the arms
+        // (by the arm weight), and from the trunk again if an arm pushed it in (the trunk wins
+        // where they overlap). Remember the deepest contact for the velocity update (friction).
+        let mut deepest: Option<(f32, Vec3A, usize)> = None;
+        let mut on_trunk = false;
+        let trunk = |c: &&u16| self.capsule_groups.get(**c as usize) == Some(&GROUP_TRUNK);
+        let resolve =
+            |p: &mut Vec3A, c: usize, allowed: f32, deepest: &mut Option<(f32, Vec3A, usize)>| {
                 if !self.boxes[c].contains(Vec3::from(*p)) {
                     return (false, false);
                 }
@@ -1405,31 +1408,30 @@ impl Cloth {
                     (false, d < offset + 0.05)
                 }
             };
-            for &c in list.iter().filter(trunk) {
-                let (_, touching) = resolve(&mut p, c as usize, 0.0, &mut deepest);
-                on_trunk |= touching;
-            }
-            if weight > 0.0 && !on_trunk {
-                // Cloth on the ramp between trunk and arm cloth may lie inside an arm by up to
-                // (1 − weight) × ARM_RAMP_CM: the sleeve enters the arm gradually.
-                let allowed = (1.0 - weight) * ARM_RAMP_CM;
-                let mut pushed = false;
-                for &c in list.iter().filter(|c| !trunk(c)) {
-                    pushed |= resolve(&mut p, c as usize, allowed, &mut deepest).0;
-                }
-                if pushed {
-                    for &c in list.iter().filter(trunk) {
-                        resolve(&mut p, c as usize, 0.0, &mut deepest);
-                    }
-                }
-            }
-            if let Some((depth, n, c)) = deepest {
-                self.contact_normal[v] = n;
-                self.contact_motion[v] = p - self.back[c].transform_point3a(p);
-                self.contact_depth[v] = depth;
-            }
-            self.x[v] = p;
+        for &c in list.iter().filter(trunk) {
+            let (_, touching) = resolve(&mut p, c as usize, 0.0, &mut deepest);
+            on_trunk |= touching;
         }
+        if weight > 0.0 && !on_trunk {
+            // Cloth on the ramp between trunk and arm cloth may lie inside an arm by up to
+            // (1 − weight) × ARM_RAMP_CM: the sleeve enters the arm gradually.
+            let allowed = (1.0 - weight) * ARM_RAMP_CM;
+            let mut pushed = false;
+            for &c in list.iter().filter(|c| !trunk(c)) {
+                pushed |= resolve(&mut p, c as usize, allowed, &mut deepest).0;
+            }
+            if pushed {
+                for &c in list.iter().filter(trunk) {
+                    resolve(&mut p, c as usize, 0.0, &mut deepest);
+                }
+            }
+        }
+        if let Some((depth, n, c)) = deepest {
+            self.contact_normal[v] = n;
+            self.contact_motion[v] = p - self.back[c].transform_point3a(p);
+            self.contact_depth[v] = depth;
+        }
+        self.x[v] = p;
     }
 
     /// Does a vertex (with or without arm weight) collide with capsule `c`? Trunk cloth ignores the
@@ -2390,6 +2392,19 @@ mod tests {
             ..SolverSettings::live()
         };
         assert!(Cloth::new(&mesh, &Material::medium(), &settings, &rig).is_err());
+        for strain_limit in [-0.1, 1.0, f32::NAN] {
+            let settings = SolverSettings {
+                strain_limit,
+                ..SolverSettings::live()
+            };
+            assert!(matches!(
+                Cloth::new(&mesh, &Material::medium(), &settings, &rig),
+                Err(ClothError::Setting {
+                    name: "strain_limit",
+                    ..
+                })
+            ));
+        }
         mesh.triangles.push([0, 1, 9]);
         assert!(Cloth::new(&mesh, &Material::medium(), &SolverSettings::live(), &rig).is_err());
         // Frames of the wrong length are padded with zeros, not a panic.
