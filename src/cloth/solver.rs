@@ -444,9 +444,8 @@ pub struct Cloth {
     /// The two previous iterates of the Chebyshev-accelerated stretch sweeps.
     sweep_even: Vec<Vec3A>,
     sweep_odd: Vec<Vec3A>,
-    /// Each vertex's edges: `vertex_edges[edge_start[v]..edge_start[v + 1]]`.
-    edge_start: Vec<u32>,
-    vertex_edges: Vec<u32>,
+    /// Each vertex's edges (`incidence.edges(v)`: indices into `edges`).
+    incidence: Adjacency,
     /// The strain limit's edges outside the bound and the vertices it moved, this round, and the
     /// round in which each edge was last looked at.
     limit_edges: Vec<u32>,
@@ -595,8 +594,7 @@ impl Cloth {
             blend_b: Vec::new(),
             sweep_even: Vec::new(),
             sweep_odd: Vec::new(),
-            edge_start: Vec::new(),
-            vertex_edges: Vec::new(),
+            incidence: Adjacency::new(0, &[]),
             limit_edges: Vec::new(),
             limit_moved: Vec::new(),
             limit_seen: Vec::new(),
@@ -714,22 +712,8 @@ impl Cloth {
         let edges: Vec<Edge> = edges.into_iter().map(|(_, e)| e).collect();
         self.edges = interleave(&edges, n, |e| [e.i, e.j]);
         // Each vertex's edges (indices into `self.edges`), for the strain limit's later rounds.
-        self.edge_start = vec![0u32; n + 1];
-        for e in &self.edges {
-            self.edge_start[e.i as usize + 1] += 1;
-            self.edge_start[e.j as usize + 1] += 1;
-        }
-        for v in 0..n {
-            self.edge_start[v + 1] += self.edge_start[v];
-        }
-        let mut fill = self.edge_start.clone();
-        self.vertex_edges = vec![0u32; 2 * self.edges.len()];
-        for (k, e) in self.edges.iter().enumerate() {
-            for v in [e.i as usize, e.j as usize] {
-                self.vertex_edges[fill[v] as usize] = k as u32;
-                fill[v] += 1;
-            }
-        }
+        let ends: Vec<[u32; 2]> = self.edges.iter().map(|e| [e.i, e.j]).collect();
+        self.incidence = Adjacency::new(n, &ends);
 
         let bends: Vec<Bend> = hinges(&self.triangles)
             .into_iter()
@@ -1352,9 +1336,7 @@ impl Cloth {
             let stamp = self.limit_round;
             self.limit_edges.clear();
             for &v in &self.limit_moved {
-                let v = v as usize;
-                let (a, b) = (self.edge_start[v] as usize, self.edge_start[v + 1] as usize);
-                for &k in &self.vertex_edges[a..b] {
+                for &k in self.incidence.edges(v as usize) {
                     if self.limit_seen[k as usize] != stamp
                         && outside(&self.x, &self.edges[k as usize])
                     {

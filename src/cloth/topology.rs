@@ -106,11 +106,15 @@ pub fn consistently_wound(triangles: &[[u32; 3]]) -> bool {
     directed.windows(2).all(|w| w[0] != w[1])
 }
 
-/// Vertex adjacency over the mesh edges (compressed rows).
+/// Vertex adjacency over the mesh edges (compressed rows): each vertex's neighbours, and beside
+/// them the indices of the edges that lead there.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Adjacency {
     offsets: Vec<u32>,
     neighbours: Vec<u32>,
+    /// Per entry of `neighbours`: the index, in the edge list given to [`Adjacency::new`], of the
+    /// edge to that neighbour.
+    edges: Vec<u32>,
 }
 
 impl Adjacency {
@@ -129,24 +133,38 @@ impl Adjacency {
         let offsets = degree;
         let mut fill = offsets.clone();
         let mut neighbours = vec![0u32; offsets[vertex_count] as usize];
-        for &[a, b] in edges {
+        let mut edge_of = vec![0u32; neighbours.len()];
+        for (k, &[a, b]) in edges.iter().enumerate() {
             if (a as usize) < vertex_count && (b as usize) < vertex_count {
-                neighbours[fill[a as usize] as usize] = b;
-                fill[a as usize] += 1;
-                neighbours[fill[b as usize] as usize] = a;
-                fill[b as usize] += 1;
+                for (v, other) in [(a, b), (b, a)] {
+                    let slot = fill[v as usize] as usize;
+                    neighbours[slot] = other;
+                    edge_of[slot] = k as u32;
+                    fill[v as usize] += 1;
+                }
             }
         }
         Adjacency {
             offsets,
             neighbours,
+            edges: edge_of,
         }
     }
 
     pub fn neighbours(&self, v: usize) -> &[u32] {
+        &self.neighbours[self.row(v)]
+    }
+
+    /// The indices of vertex `v`'s edges in the edge list the adjacency was built from, in the
+    /// order of [`Adjacency::neighbours`].
+    pub fn edges(&self, v: usize) -> &[u32] {
+        &self.edges[self.row(v)]
+    }
+
+    fn row(&self, v: usize) -> std::ops::Range<usize> {
         match (self.offsets.get(v), self.offsets.get(v + 1)) {
-            (Some(&a), Some(&b)) => &self.neighbours[a as usize..b as usize],
-            _ => &[],
+            (Some(&a), Some(&b)) => a as usize..b as usize,
+            _ => 0..0,
         }
     }
 }
@@ -176,6 +194,10 @@ mod tests {
         assert_eq!(adjacency.neighbours(0), &[1, 2, 3]);
         assert_eq!(adjacency.neighbours(1), &[0, 2]);
         assert!(adjacency.neighbours(9).is_empty());
+        // Edges [0,1] [0,2] [0,3] [1,2] [2,3]: vertex 2's are 1 (to 0), 3 (to 1) and 4 (to 3).
+        assert_eq!(adjacency.neighbours(2), &[0, 1, 3]);
+        assert_eq!(adjacency.edges(2), &[1, 3, 4]);
+        assert!(adjacency.edges(9).is_empty());
     }
 
     #[test]
