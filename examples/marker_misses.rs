@@ -11,7 +11,9 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use suitcap::descriptor::markers::{Component, MarkerDetector, Verdict};
+use suitcap::descriptor::markers::{
+    match_markers, match_tolerance, Component, DetectedMarker, MarkerDetector, TruthMarker, Verdict,
+};
 use suitcap::mask::Mask;
 use suitcap::suit::SuitDefinition;
 
@@ -37,41 +39,18 @@ fn main() -> anyhow::Result<()> {
             let img = image::open(data.join("frames").join(name))?.to_rgb8();
             let mask = Mask::from_gray(&image::open(data.join(&args[1]).join(name))?.to_luma8());
             let comps = detector.components(&img, &mask);
-            let expected: Vec<_> = truth
-                .iter()
-                .filter(|t| t.frame == index)
-                .filter_map(|t| {
-                    let colour = suit.markers.iter().position(|c| c.name == t.colour)?;
-                    Some((glam::Vec2::new(t.x, t.y), colour, t))
-                })
-                .collect();
-            let side = (expected.iter().map(|t| t.2.visible_px).max().unwrap_or(16) as f32).sqrt();
-            let tol = (0.6 * side).max(2.0);
+            let expected = TruthMarker::of_frame(&truth, index, &suit);
+            let tol = match_tolerance(&expected);
             let dets: Vec<&Component> = comps
                 .iter()
                 .filter(|c| c.verdict == Verdict::Marker)
                 .collect();
-            let mut pairs = Vec::new();
-            for (t, e) in expected.iter().enumerate() {
-                for (d, c) in dets.iter().enumerate() {
-                    let dist = c.marker.centre.distance(e.0);
-                    if c.marker.colour == e.1 && dist <= tol {
-                        pairs.push((dist, t, d));
-                    }
-                }
-            }
-            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let (mut tm, mut dm) = (vec![false; expected.len()], vec![false; dets.len()]);
-            for (_, t, d) in pairs {
-                if !tm[t] && !dm[d] {
-                    tm[t] = true;
-                    dm[d] = true;
-                }
-            }
+            let detected: Vec<DetectedMarker> = dets.iter().map(|c| c.marker).collect();
+            let (tm, dm) = match_markers(&detected, &expected, tol);
             detections += dets.len();
             correct += dm.iter().filter(|&&m| m).count();
             for (t, e) in expected.iter().enumerate() {
-                if e.2.visible_fraction < 0.6 || e.2.visible_px < 6 {
+                if e.visible_fraction < 0.6 || e.visible_px < 6 {
                     continue;
                 }
                 counted += 1;
@@ -81,20 +60,20 @@ fn main() -> anyhow::Result<()> {
                 }
                 let near = comps
                     .iter()
-                    .filter(|c| c.marker.colour == e.1)
+                    .filter(|c| c.marker.colour == e.colour)
                     .min_by(|a, b| {
                         a.marker
                             .centre
-                            .distance(e.0)
-                            .total_cmp(&b.marker.centre.distance(e.0))
+                            .distance(e.centre)
+                            .total_cmp(&b.marker.centre.distance(e.centre))
                     });
                 let reason = match near {
                     None => "no component".to_string(),
-                    Some(c) if c.marker.centre.distance(e.0) > 2.0 * tol => {
+                    Some(c) if c.marker.centre.distance(e.centre) > 2.0 * tol => {
                         "no component within 2 tol".to_string()
                     }
                     Some(c) => {
-                        let far = c.marker.centre.distance(e.0) > tol;
+                        let far = c.marker.centre.distance(e.centre) > tol;
                         format!("{:?}{}", c.verdict, if far { " (off centre)" } else { "" })
                     }
                 };
@@ -102,7 +81,7 @@ fn main() -> anyhow::Result<()> {
                     let nearest = near.map(|c| (c.marker, c.border, c.peak_saturation));
                     println!(
                         "miss f{index} {:?} c{} vis {:.2}/{} tol {tol:.1}: {reason} {nearest:?}",
-                        e.0, e.1, e.2.visible_fraction, e.2.visible_px
+                        e.centre, e.colour, e.visible_fraction, e.visible_px
                     );
                 }
                 *miss_reasons.entry(reason).or_default() += 1;
@@ -139,8 +118,8 @@ fn main() -> anyhow::Result<()> {
                 }
                 let any_truth = expected
                     .iter()
-                    .filter(|e| e.1 == c.marker.colour)
-                    .map(|e| e.0.distance(c.marker.centre))
+                    .filter(|e| e.colour == c.marker.colour)
+                    .map(|e| e.centre.distance(c.marker.centre))
                     .fold(f32::INFINITY, f32::min);
                 let kind = if any_truth <= tol {
                     "duplicate / partly visible truth"

@@ -517,7 +517,7 @@ fn describe(
     descriptor: &str,
     truth_markers: Option<&PathBuf>,
 ) -> anyhow::Result<()> {
-    use suitcap::descriptor::markers::{score_markers, MarkerScore, TruthMarker};
+    use suitcap::descriptor::markers::{match_tolerance, score_markers, MarkerScore, TruthMarker};
     use suitcap::descriptor::{Codebooks, Describer, DescriptorKind};
     let kind = DescriptorKind::parse(descriptor).with_context(|| {
         format!("--descriptor '{descriptor}': expected fc, hog, fc+hog, full or silhouette")
@@ -591,26 +591,13 @@ fn describe(
             ));
         }
         if let Some(truth) = &truth {
-            let expected: Vec<TruthMarker> = truth
-                .iter()
-                .filter(|t| t.frame as u64 == frame.index)
-                .filter_map(|t| {
-                    let colour = suit.markers.iter().position(|c| c.name == t.colour)?;
-                    Some(TruthMarker {
-                        centre: glam::Vec2::new(t.x, t.y),
-                        colour,
-                        visible_fraction: t.visible_fraction,
-                        visible_px: t.visible_px,
-                    })
-                })
-                .collect();
-            let side = (expected.iter().map(|t| t.visible_px).max().unwrap_or(16) as f32).sqrt();
+            let expected = TruthMarker::of_frame(truth, frame.index as usize, &suit);
             score.add(score_markers(
                 &markers,
                 &expected,
                 0.6,
                 6,
-                (0.6 * side).max(2.0),
+                match_tolerance(&expected),
             ));
         }
         frames += 1;

@@ -52,6 +52,7 @@
 use glam::Vec2;
 use image::RgbImage;
 
+use crate::dataset::MarkerRecord;
 use crate::mask::Mask;
 use crate::segment::features::{ColourLut, MarkerGate, PixelColour};
 use crate::suit::SuitDefinition;
@@ -522,6 +523,67 @@ pub struct TruthMarker {
     pub visible_px: u32,
 }
 
+impl TruthMarker {
+    /// The generator's records (`markers.csv`) of frame `frame` as truth markers, colours as
+    /// indices into `suit`'s markers; records of a colour the suit does not have are left out.
+    pub fn of_frame(
+        records: &[MarkerRecord],
+        frame: usize,
+        suit: &SuitDefinition,
+    ) -> Vec<TruthMarker> {
+        records
+            .iter()
+            .filter(|r| r.frame == frame)
+            .filter_map(|r| {
+                let colour = suit.markers.iter().position(|c| c.name == r.colour)?;
+                Some(TruthMarker {
+                    centre: Vec2::new(r.x, r.y),
+                    colour,
+                    visible_fraction: r.visible_fraction,
+                    visible_px: r.visible_px,
+                })
+            })
+            .collect()
+    }
+}
+
+/// How far (pixels) a detection may lie from a truth marker's projected centre and still be it:
+/// 0.6 × the side of the frame's largest visible marker (its visible pixels taken as a square), at
+/// least 2 px; a 4 × 4 px square when the frame has no truth.
+pub fn match_tolerance(truth: &[TruthMarker]) -> f32 {
+    let side = (truth.iter().map(|t| t.visible_px).max().unwrap_or(16) as f32).sqrt();
+    (0.6 * side).max(2.0)
+}
+
+/// Greedy matching of detections to truth markers of the same colour within `tolerance` pixels,
+/// nearest pairs first, each used at most once: whether each truth marker and each detection was
+/// matched.
+pub fn match_markers(
+    detected: &[DetectedMarker],
+    truth: &[TruthMarker],
+    tolerance: f32,
+) -> (Vec<bool>, Vec<bool>) {
+    let mut pairs: Vec<(f32, usize, usize)> = Vec::new();
+    for (t, tm) in truth.iter().enumerate() {
+        for (d, dm) in detected.iter().enumerate() {
+            let distance = dm.centre.distance(tm.centre);
+            if dm.colour == tm.colour && distance <= tolerance {
+                pairs.push((distance, t, d));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut truth_matched = vec![false; truth.len()];
+    let mut detection_matched = vec![false; detected.len()];
+    for (_, t, d) in pairs {
+        if !truth_matched[t] && !detection_matched[d] {
+            truth_matched[t] = true;
+            detection_matched[d] = true;
+        }
+    }
+    (truth_matched, detection_matched)
+}
+
 /// Detections scored against the truth of one or more frames.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct MarkerScore {
@@ -569,29 +631,11 @@ pub fn score_markers(
     min_px: u32,
     tolerance: f32,
 ) -> MarkerScore {
-    let mut used = vec![false; detected.len()];
+    let (truth_matched, used) = match_markers(detected, truth, tolerance);
     let mut score = MarkerScore {
         detections: detected.len(),
         ..MarkerScore::default()
     };
-    // Greedy matching, nearest pairs first.
-    let mut pairs: Vec<(f32, usize, usize)> = Vec::new();
-    for (t, tm) in truth.iter().enumerate() {
-        for (d, dm) in detected.iter().enumerate() {
-            let distance = dm.centre.distance(tm.centre);
-            if dm.colour == tm.colour && distance <= tolerance {
-                pairs.push((distance, t, d));
-            }
-        }
-    }
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut truth_matched = vec![false; truth.len()];
-    for (_, t, d) in pairs {
-        if !truth_matched[t] && !used[d] {
-            truth_matched[t] = true;
-            used[d] = true;
-        }
-    }
     for (t, tm) in truth.iter().enumerate() {
         if tm.visible_fraction >= min_fraction && tm.visible_px >= min_px {
             score.truth += 1;
@@ -696,6 +740,51 @@ mod tests {
         );
         assert_eq!(score.recall(), 0.5);
         assert!((score.precision() - 2.0 / 3.0).abs() < 1e-12);
+        // The same matching, per marker: the red at 0 and the partial red at 20 are found.
+        let (truth_matched, detection_matched) = match_markers(&detected, &truth, 2.0);
+        assert_eq!(truth_matched, vec![true, false, true]);
+        assert_eq!(detection_matched, vec![true, false, true]);
+    }
+
+    #[test]
+    fn truth_records_become_markers_of_the_suit_with_a_tolerance_from_the_largest() {
+        let record = |frame: usize, colour: &str, visible_px: u32| crate::dataset::MarkerRecord {
+            frame,
+            marker_id: 0,
+            colour: colour.to_owned(),
+            x: 3.0,
+            y: 4.0,
+            visible_fraction: 1.0,
+            visible_px,
+        };
+        let records = [
+            record(0, "red", 25),
+            record(0, "gold", 100),
+            record(1, "cyan", 9),
+            record(0, "cyan", 4),
+        ];
+        let suit = suit();
+        let truth = TruthMarker::of_frame(&records, 0, &suit);
+        // Frame 0's red and cyan (a gold marker is not on this suit); 0.6 × √25 = 3 px.
+        let red = suit
+            .markers
+            .iter()
+            .position(|m| m.name == "red")
+            .expect("red");
+        let cyan = suit
+            .markers
+            .iter()
+            .position(|m| m.name == "cyan")
+            .expect("cyan");
+        assert_eq!(
+            truth.iter().map(|t| t.colour).collect::<Vec<_>>(),
+            vec![red, cyan]
+        );
+        assert_eq!(truth[0].centre, Vec2::new(3.0, 4.0));
+        assert!((match_tolerance(&truth) - 3.0).abs() < 1e-6);
+        // At least 2 px, and 0.6 × 4 px with no truth at all.
+        assert_eq!(match_tolerance(&truth[1..]), 2.0);
+        assert!((match_tolerance(&[]) - 2.4).abs() < 1e-6);
     }
 
     /// Paints the `size` × `size` square at (`x0`, `y0`).
