@@ -16,7 +16,8 @@
 //!   the back along a half-ellipse over the shoulder, as low as clears the capsules; the columns
 //!   within the neck's reach stay open: the neck hole. A short sleeve tube is welded to each armhole
 //!   (its first ring *is* the armhole's boundary loop, so the mesh is one connected piece) and
-//!   blends in two rings to a circle around the upper arm, ending about half-way to the elbow. The
+//!   blends in two rings to a circle around the upper arm, ending about half-way to the elbow, its
+//!   last ring held around the arm ([`Cuff`], [`SLEEVE_CUFF_REACH_CM`]). The
 //!   sleeve's vertices are evenly spaced along the armhole and, on the circle, evenly in angle:
 //!   kept at the armhole's directions from the arm's axis (an armhole is taller than it is deep,
 //!   so equal arcs subtend unequal angles), the circle crowded them at the armpit's corners into
@@ -40,7 +41,8 @@
 //! hip loosely (within [`DRESS_WAIST_SLACK_CM`]: bending the spine lengthens the back between the
 //! two bones by a few centimetres, which two rigid rings would force into the bodice as stretch).
 //!
-//! Hands to the solver: a [`GarmentMesh`] — rest positions in world centimetres, triangles, anchors.
+//! Hands to the solver: a [`GarmentMesh`] — rest positions in world centimetres, triangles, anchors
+//! and cuffs.
 
 use std::f32::consts::{PI, TAU};
 use std::str::FromStr;
@@ -72,6 +74,20 @@ pub struct GarmentMesh {
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
     pub anchors: Vec<Anchor>,
+    /// Vertices kept around a limb (a T-shirt's sleeve ends).
+    pub cuffs: Vec<Cuff>,
+}
+
+/// A vertex of a sleeve's end held around its limb: never farther than `reach_cm` from the surface
+/// of bone `bone`'s collision capsules. Within that reach the vertex is free: it slides along the
+/// limb, turns about it and hangs to one side as it likes, but the arm cannot leave the sleeve (see
+/// [`SLEEVE_CUFF_REACH_CM`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cuff {
+    pub vertex: u32,
+    /// Joint index in the rig's skeleton.
+    pub bone: usize,
+    pub reach_cm: f32,
 }
 
 /// The procedural garments.
@@ -254,6 +270,7 @@ impl GarmentMesh {
             positions,
             triangles,
             anchors: Vec::new(),
+            cuffs: Vec::new(),
         }
     }
 
@@ -293,6 +310,11 @@ impl GarmentMesh {
                 || a.slack_cm < 0.0
             {
                 return Err(invalid(format!("anchor {a:?} is invalid")));
+            }
+        }
+        for c in &self.cuffs {
+            if c.vertex as usize >= n || !(c.reach_cm.is_finite() && c.reach_cm >= 0.0) {
+                return Err(invalid(format!("cuff {c:?} is invalid")));
             }
         }
         Ok(())
@@ -735,7 +757,7 @@ fn resample(points: &[Vec3], segments: usize) -> Vec<Vec3> {
 /// Rings of evenly spaced vertices, sampled at even arc-length fractions of the armhole loop so they
 /// do not inherit its uneven spacing: the first halfway between the loop and a circle around the
 /// arm, the rest circles tapering to the arm's radius plus the ease, ending about half-way down the
-/// upper arm. The loop is stitched to the first ring by arc-length fraction.
+/// upper arm. The loop is stitched to the first ring by arc-length fraction. Returns the last ring.
 fn build_sleeve(
     b: &mut Builder,
     armhole: &[u32],
@@ -743,12 +765,12 @@ fn build_sleeve(
     elbow: Vec3,
     arm: &Capsule,
     params: &GarmentParams,
-) {
+) -> Vec<u32> {
     let d = (elbow - shoulder).normalize_or(Vec3::X);
     let upper_arm = elbow.distance(shoulder);
     let l = armhole.len();
     if l < 3 {
-        return;
+        return Vec::new();
     }
     let loop_points: Vec<Vec3> = armhole.iter().map(|&v| b.positions[v as usize]).collect();
     // Arc-length fraction of each loop vertex.
@@ -828,6 +850,7 @@ fn build_sleeve(
         previous = ring;
         previous_at = ring_at.clone();
     }
+    previous
 }
 
 /// Angles spaced evenly around the circle, as many as `angles` (directions in order around a
@@ -1039,6 +1062,7 @@ fn finish(
     name: &str,
     mut b: Builder,
     mut anchors: Vec<Anchor>,
+    cuffs: Vec<Cuff>,
     ease: f32,
 ) -> GarmentMesh {
     push_out(rest, &mut b.positions, 0.5 * ease);
@@ -1050,8 +1074,22 @@ fn finish(
         positions: b.positions,
         triangles: b.triangles,
         anchors,
+        cuffs,
     }
 }
+
+/// How far a T-shirt's sleeve end may stand off the upper arm's capsule, cm ([`Cuff`]; it is cut at
+/// the ease, 2.5 cm, off it). Without it nothing but the collisions held a sleeve on its arm, and
+/// where the arm sinks into the torso the trunk wins: lowering the arms from the rest T-pose while
+/// dressing, the arm pressed the sleeve's underside into the chest and came out through it, so on
+/// CMU walk 02_01 and kick 10_03 most sleeve-end vertices ended 5–13 cm off the arm for the rest of
+/// the clip. The sleeve end may still slide along the arm: held also at its place along the arm
+/// (within 2.5 cm), the sleeve of a shirt cut in the T-pose had to stretch over the shoulder of a
+/// lowered arm, and the worst frame's 95th-percentile strain of `cargo bench --bench cloth`'s
+/// T-shirts rose from 0.7–1.7 % to 2.5–4.3 % (maximum 15–20 %); allowed 5, 8 or 11 cm towards the
+/// shoulder, 1.8–2.7 % (9–32 %), 1.1–2.2 % (9–14 %), 0.8–1.8 % (9–11 %). A sleeve that keeps its
+/// length on a lowered or raised arm needs a shirt cut with the arms lowered (not done).
+pub const SLEEVE_CUFF_REACH_CM: f32 = 5.0;
 
 fn tshirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentError> {
     let hip = rest.joint_position("hip")?;
@@ -1062,7 +1100,8 @@ fn tshirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentErr
     let bodice = build_bodice(&mut b, rest, &spec, params)?;
     let top_y = spec.rings[spec.rings.len() - 1].0;
     let anchors = neckline_anchors(&b, rest, &bodice, top_y, true)?;
-    // Sleeves on the two armhole loops.
+    let mut cuffs = Vec::new();
+    // Sleeves on the two armhole loops, their ends held around the upper arms.
     let loops = boundary_loops(&b.triangles);
     for (side, shoulder_name, elbow_name, part) in [
         (-1.0f32, "rShldr", "rForeArm", "right_upper_arm"),
@@ -1081,10 +1120,16 @@ fn tshirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentErr
                 name: "tshirt".into(),
                 message: format!("no armhole found on the {shoulder_name} side"),
             })?;
-        build_sleeve(&mut b, &armhole, shoulder, elbow, &arm, params);
+        let end = build_sleeve(&mut b, &armhole, shoulder, elbow, &arm, params);
+        let bone = rest.joint(shoulder_name)?;
+        cuffs.extend(end.into_iter().map(|vertex| Cuff {
+            vertex,
+            bone,
+            reach_cm: SLEEVE_CUFF_REACH_CM,
+        }));
     }
     let _ = bodice.grid.len();
-    Ok(finish(rest, "tshirt", b, anchors, params.ease_cm))
+    Ok(finish(rest, "tshirt", b, anchors, cuffs, params.ease_cm))
 }
 
 /// Skirt rings from `waist_y` down to the hem: (height, semi-axes), top first.
@@ -1166,7 +1211,14 @@ fn skirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentErro
             slack_cm: 0.0,
         })
         .collect();
-    Ok(finish(rest, "skirt", b, anchors, params.ease_cm))
+    Ok(finish(
+        rest,
+        "skirt",
+        b,
+        anchors,
+        Vec::new(),
+        params.ease_cm,
+    ))
 }
 
 /// How far the dress's waist may move from its place on the hip bone, cm. With 2.5 cm the kick
@@ -1197,7 +1249,14 @@ fn dress(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentErro
         local: Vec3::ZERO,
         slack_cm: DRESS_WAIST_SLACK_CM,
     }));
-    Ok(finish(rest, "dress", b, anchors, params.ease_cm))
+    Ok(finish(
+        rest,
+        "dress",
+        b,
+        anchors,
+        Vec::new(),
+        params.ease_cm,
+    ))
 }
 
 /// Bone rest transforms for binding arbitrary meshes (the OBJ loader's anchors).

@@ -29,7 +29,7 @@ pub mod solver;
 pub mod topology;
 
 pub use capsule::Capsule;
-pub use garment::{Anchor, GarmentKind, GarmentMesh, GarmentParams};
+pub use garment::{Anchor, Cuff, GarmentKind, GarmentMesh, GarmentParams};
 pub use material::Material;
 pub use proxies::{BodyPose, BodyRig};
 pub use solver::{Cloth, FrameQuality, QualitySummary, SolverSettings};

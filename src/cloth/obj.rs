@@ -248,6 +248,7 @@ pub fn garment_from_mesh(name: String, mesh: ObjMesh, rig: &BodyRig, band_cm: f3
         positions: mesh.positions,
         triangles: mesh.triangles,
         anchors,
+        cuffs: Vec::new(),
     }
 }
 

@@ -28,6 +28,11 @@
 //!      1 cm on the walk, where the skirt's weight hangs on it), and the kick's worst-frame
 //!      95th-percentile strain falls from 3.0 to 2.3–2.4 % (time constants of 5–40 ms all gave
 //!      2.0–2.6 %);
+//!    - **cuffs** (a T-shirt's sleeve ends, [`Cuff`](super::garment::Cuff)): a vertex farther
+//!      than its reach (5 cm) from its upper arm's capsule is put back at that distance.
+//!      Collisions alone did not keep an arm in its sleeve: where the arm sinks into the chest the
+//!      trunk wins, so an arm lowered from the T-pose pressed the sleeve's underside into the
+//!      chest and came out through it;
 //!    - **tethers** (long-range attachments, Kim, Tang and Zordan 2012): each free vertex may be no
 //!      farther from its nearest rigid anchor than its geodesic rest distance, found by Dijkstra
 //!      from all rigid anchors over two-ring steps of the mesh (paths along edges alone zigzag and
@@ -323,6 +328,13 @@ pub enum ClothError {
         bone: usize,
         bones: usize,
     },
+    #[error("garment '{garment}': cuff {index} is held around bone {bone}, which has no collision capsule (the skeleton has {bones} joints)")]
+    CuffBone {
+        garment: String,
+        index: usize,
+        bone: usize,
+        bones: usize,
+    },
     #[error("solver setting {name} = {value} is out of range ({expected})")]
     Setting {
         name: &'static str,
@@ -386,6 +398,15 @@ struct Bend {
     c: [f32; 4],
 }
 
+/// A [`Cuff`](super::garment::Cuff): `vertex` no farther than `reach` from the capsules `capsules` (a range of
+/// [`Cloth::cuff_capsules`]).
+#[derive(Clone, Debug)]
+struct CuffLimit {
+    vertex: u32,
+    reach: f32,
+    capsules: std::ops::Range<usize>,
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Tether {
     vertex: u32,
@@ -404,6 +425,9 @@ pub struct Cloth {
     mass: Vec<f32>,
     inv_mass: Vec<f32>,
     anchors: Vec<Anchor>,
+    cuffs: Vec<CuffLimit>,
+    /// Capsule indices of the cuffs' bones.
+    cuff_capsules: Vec<u16>,
     edges: Vec<Edge>,
     bends: Vec<Bend>,
     tethers: Vec<Tether>,
@@ -476,6 +500,32 @@ impl Cloth {
                 index,
                 bone: a.bone,
                 bones,
+            });
+        }
+        // Each cuff's bone's capsules.
+        let mut cuffs = Vec::with_capacity(garment.cuffs.len());
+        let mut cuff_capsules = Vec::new();
+        for (index, c) in garment.cuffs.iter().enumerate() {
+            let start = cuff_capsules.len();
+            cuff_capsules.extend(
+                rig.proxies()
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| p.joint == c.bone)
+                    .map(|(k, _)| k as u16),
+            );
+            if cuff_capsules.len() == start {
+                return Err(ClothError::CuffBone {
+                    garment: garment.name.clone(),
+                    index,
+                    bone: c.bone,
+                    bones,
+                });
+            }
+            cuffs.push(CuffLimit {
+                vertex: c.vertex,
+                reach: c.reach_cm,
+                capsules: start..cuff_capsules.len(),
             });
         }
         let check = |name: &'static str, value: f32, ok: bool, expected: &'static str| {
@@ -563,6 +613,8 @@ impl Cloth {
             mass,
             inv_mass,
             anchors: garment.anchors.clone(),
+            cuffs,
+            cuff_capsules,
             edges: Vec::new(),
             bends: Vec::new(),
             tethers: Vec::new(),
@@ -1082,6 +1134,7 @@ impl Cloth {
         };
         for _ in 0..self.settings.iterations {
             self.solve_loose_anchors(belt);
+            self.solve_cuffs();
             // Tethers before the stretch sweeps, so that the sweeps spread each tether's pull over
             // the edges around its vertex (see the module documentation).
             self.solve_tethers();
@@ -1181,6 +1234,25 @@ impl Cloth {
                         let l = l2.sqrt();
                         self.x[a.vertex as usize] -= d * ((1.0 - a.slack_cm / l) * fraction);
                     }
+                }
+            }
+        }
+    }
+
+    /// Cuffs: a sleeve end farther than its reach from its limb's surface is put back at that
+    /// distance from the nearest of the limb's capsules.
+    fn solve_cuffs(&mut self) {
+        for c in &self.cuffs {
+            let v = c.vertex as usize;
+            let p = self.x[v];
+            let nearest = self.cuff_capsules[c.capsules.clone()]
+                .iter()
+                .filter_map(|&k| self.prepared.get(k as usize))
+                .map(|capsule| capsule.query(p))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((d, n)) = nearest {
+                if d > c.reach {
+                    self.x[v] = p - n * (d - c.reach);
                 }
             }
         }
@@ -1807,6 +1879,7 @@ mod tests {
     use crate::body::{Body, BodyPart, Material as Tissue};
     use crate::cloth::capsule::Capsule;
     use crate::cloth::garment::tests::chidi;
+    use crate::cloth::garment::{Cuff, SLEEVE_CUFF_REACH_CM};
     use crate::skeleton::{Channel, Joint, Skeleton};
     use glam::Vec2;
     use std::path::Path;
@@ -2328,6 +2401,36 @@ mod tests {
     }
 
     #[test]
+    fn the_arms_stay_in_the_sleeves_when_they_are_lowered() {
+        // Dressing blends from the T-pose to the walk's first frame, arms hanging: before the
+        // cuffs, the arms came out through the sleeves' undersides and most sleeve-end vertices
+        // ended 5–13 cm off the arm.
+        let (rig, frames) = walk();
+        let mesh = GarmentMesh::generate(GarmentKind::TShirt, &rig, &GarmentParams::live())
+            .expect("tshirt");
+        assert!(!mesh.cuffs.is_empty());
+        let mut cloth =
+            Cloth::new(&mesh, &Material::medium(), &SolverSettings::live(), &rig).expect("cloth");
+        cloth.dress(&rig, frames.frame(0));
+        for k in 1..frames.frame_count() {
+            cloth.step_frame(&rig, frames.frame(k - 1), frames.frame(k));
+        }
+        let off_the_arm = |c: &Cuff| {
+            rig.proxies()
+                .iter()
+                .zip(&cloth.pose().capsules)
+                .filter(|(p, _)| p.joint == c.bone)
+                .map(|(_, capsule)| {
+                    capsule.signed_distance(cloth.positions()[c.vertex as usize].into())
+                })
+                .fold(f32::INFINITY, f32::min)
+        };
+        let worst = mesh.cuffs.iter().map(off_the_arm).fold(0.0f32, f32::max);
+        // The later constraints of a substep may move a cuff vertex a little past its reach.
+        assert!(worst < SLEEVE_CUFF_REACH_CM + 1.0, "{worst} cm");
+    }
+
+    #[test]
     fn a_root_jump_teleports_the_cloth_and_a_pose_jump_dresses_again() {
         let (rig, frames) = walk();
         let mesh =
@@ -2380,6 +2483,17 @@ mod tests {
             Err(ClothError::AnchorBone { bone: 7, .. })
         ));
         mesh.anchors.clear();
+        // A cuff around a bone without a capsule (the rig has none at all).
+        mesh.cuffs.push(Cuff {
+            vertex: 0,
+            bone: 0,
+            reach_cm: 5.0,
+        });
+        assert!(matches!(
+            Cloth::new(&mesh, &Material::medium(), &SolverSettings::live(), &rig),
+            Err(ClothError::CuffBone { index: 0, .. })
+        ));
+        mesh.cuffs.clear();
         let settings = SolverSettings {
             substeps: 0,
             ..SolverSettings::live()
