@@ -1082,8 +1082,8 @@ fn finish(
 /// the ease, 2.5 cm, off it). Without it nothing but the collisions held a sleeve on its arm, and
 /// where the arm sinks into the torso the trunk wins: lowering the arms from the rest T-pose while
 /// dressing, the arm pressed the sleeve's underside into the chest and came out through it, so on
-/// CMU walk 02_01 and kick 10_03 most sleeve-end vertices ended 5–13 cm off the arm for the rest of
-/// the clip. The sleeve end may still slide along the arm: held also at its place along the arm
+/// CMU walk 02_01 and kick 10_03 most sleeve-end vertices were 5–16 cm off the arm within a few
+/// frames and stayed off. The sleeve end may still slide along the arm: held also at its place along the arm
 /// (within 2.5 cm), the sleeve of a shirt cut in the T-pose had to stretch over the shoulder of a
 /// lowered arm, and the worst frame's 95th-percentile strain of `cargo bench --bench cloth`'s
 /// T-shirts rose from 0.7–1.7 % to 2.5–4.3 % (maximum 15–20 %); allowed 5, 8 or 11 cm towards the

@@ -398,8 +398,8 @@ struct Bend {
     c: [f32; 4],
 }
 
-/// A [`Cuff`](super::garment::Cuff): `vertex` no farther than `reach` from the capsules `capsules` (a range of
-/// [`Cloth::cuff_capsules`]).
+/// A [`Cuff`](super::garment::Cuff): `vertex` no farther than `reach` from the capsules whose
+/// indices are `cuff_capsules[capsules]`.
 #[derive(Clone, Debug)]
 struct CuffLimit {
     vertex: u32,
