@@ -3,7 +3,7 @@
 //!
 //! Prints `run_motion`'s summary for walk 02_01 and kick 10_03, T-shirt and dress at about 2,000
 //! and 4,000 vertices (the same cases as `cargo bench --bench cloth`), and how far the T-shirt's
-//! sleeve ends (its cuffs) got from the arm. With `-v`, also where the
+//! sleeve ends (its cuffs) got from the arm. The dressed first frame counts like the others. With `-v`, also where the
 //! worst frame's top 5 % of edges lie: stretched or compressed, rest length, nearest body part,
 //! height band; how many frames have a largest strain above 5 / 10 / 20 %; and, in the frame with
 //! the largest strain, the edges above 10 % with the two capsules nearest each end (signed
@@ -14,16 +14,22 @@
 //! `CLOTH_COMPRESSION`, `CLOTH_TETHER_SLACK`,
 //! `CLOTH_TAU` (loose-anchor time constant, s), `CLOTH_BEND_SCALE` (× the bending compliance),
 //! `CLOTH_COUNTS` (vertex counts, e.g. `2500,3300`), `CLOTH_MATERIAL` (a preset name, default
-//! medium). The frames/s printed are from `run_motion`'s
+//! medium). `CLOTH_MODE=quality`: the quality mode of `suitcap run` / `drape` instead (its
+//! substeps, and the garment at its 1 cm edges instead of the vertex counts). `CLOTH_CLIP`: another
+//! BVH file instead of the two clips, from its first frame; `CLOTH_SUBJECT`: another built-in
+//! subject than chidi, or `motion` for the clip's own skeleton at girth 1 (what `suitcap drape`
+//! wears without masks). The frames/s printed are from `run_motion`'s
 //! stepping time: one run, noisy; use `cargo bench --bench cloth` for speed.
 
 use std::path::Path;
 
 use glam::Vec3A;
+use suitcap::body::Body;
 use suitcap::body::Subject;
+use suitcap::body_size::BodySize;
 use suitcap::bvh::Motion;
 use suitcap::cloth::capsule::Capsule;
-use suitcap::cloth::garment::{GarmentKind, GarmentMesh};
+use suitcap::cloth::garment::{GarmentKind, GarmentMesh, GarmentParams};
 use suitcap::cloth::material::Material;
 use suitcap::cloth::proxies::{BodyRig, DEFAULT_MARGIN_CM};
 use suitcap::cloth::solver::{run_motion, Cloth, SolverSettings};
@@ -40,13 +46,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .cloned()
         .unwrap_or_default();
     let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let subject = Subject::find("chidi").ok_or("no subject chidi")?;
+    let subject_name = std::env::var("CLOTH_SUBJECT").unwrap_or_else(|_| "chidi".into());
+    let quality_mode = std::env::var("CLOTH_MODE").is_ok_and(|m| m == "quality");
     // Vertex counts (default the bench's 2,000 and 4,000), e.g. CLOTH_COUNTS=2400,3400.
     let counts: Vec<usize> = std::env::var("CLOTH_COUNTS")
         .ok()
         .map(|s| s.split(',').filter_map(|c| c.trim().parse().ok()).collect())
         .unwrap_or_else(|| vec![2000, 4000]);
-    let mut settings = SolverSettings::live();
+    let mut settings = if quality_mode {
+        SolverSettings::quality()
+    } else {
+        SolverSettings::live()
+    };
     let env = |name: &str| std::env::var(name).ok().and_then(|s| s.parse::<f32>().ok());
     if let Some(v) = env("CLOTH_SUBSTEPS") {
         settings.substeps = v as u32;
@@ -76,31 +87,56 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(v) = env("CLOTH_BEND_SCALE") {
         material.bend_compliance *= v;
     }
-    for (clip_name, clip) in [
-        ("walk", "tests/data/mocap/cmu_02_01_walk.bvh"),
-        ("kick", "tests/data/mocap/cmu_10_03_kick_ball.bvh"),
-    ] {
+    let extra_clip = std::env::var("CLOTH_CLIP").ok();
+    let (clips, first_frame) = match &extra_clip {
+        Some(clip) => (vec![("clip", clip.as_str())], 0),
+        None => (
+            vec![
+                ("walk", "tests/data/mocap/cmu_02_01_walk.bvh"),
+                ("kick", "tests/data/mocap/cmu_10_03_kick_ball.bvh"),
+            ],
+            FIRST_FRAME,
+        ),
+    };
+    // The quality mode's garment has one size (its edge length), not a vertex count.
+    let counts = if quality_mode { vec![0] } else { counts };
+    for (clip_name, clip) in clips {
         let motion = Motion::load(&repo.join(clip))?;
-        let rig = BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM)?;
+        let rig = if subject_name == "motion" {
+            let (subject, skeleton) = BodySize::TEMPLATE.subject(&motion.skeleton);
+            let body = Body::new(&subject, &skeleton)?;
+            BodyRig::new(skeleton, body, DEFAULT_MARGIN_CM)
+        } else {
+            let subject =
+                Subject::find(&subject_name).ok_or(format!("no subject {subject_name}"))?;
+            BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM)?
+        };
         let (frames, _) =
             rig.scale_motion(&motion)
-                .resample(FIRST_FRAME, None, settings.fps as f64)?;
+                .resample(first_frame, None, settings.fps as f64)?;
         for kind in [GarmentKind::TShirt, GarmentKind::Dress] {
             for &target in &counts {
-                let case = format!("{clip_name}/{}/{target}", kind.name());
+                let size = if quality_mode {
+                    "quality".to_string()
+                } else {
+                    target.to_string()
+                };
+                let case = format!("{clip_name}/{}/{size}", kind.name());
                 if !only.is_empty() && !case.contains(&only) {
                     continue;
                 }
-                let (mesh, _) = GarmentMesh::with_vertex_count(kind, &rig, target, 2.5)?;
+                let mesh = if quality_mode {
+                    GarmentMesh::generate(kind, &rig, &GarmentParams::quality())?
+                } else {
+                    GarmentMesh::with_vertex_count(kind, &rig, target, 2.5)?.0
+                };
                 let mut cloth = Cloth::new(&mesh, &material, &settings, &rig)?;
                 let (mut worst, mut peak) = (Snapshot::default(), Snapshot::default());
                 let mut maxima = Vec::new();
                 let summary = run_motion(&rig, &mut cloth, &frames, |k, c, q| {
-                    if k > 0 {
-                        maxima.push(q.strain_max);
-                        peak.keep_if_above(q.strain_max, k, c);
-                        worst.keep_if_above(q.strain_p95, k, c);
-                    }
+                    maxima.push(q.strain_max);
+                    peak.keep_if_above(q.strain_max, k, c);
+                    worst.keep_if_above(q.strain_p95, k, c);
                 })?;
                 let sleeves = if mesh.cuffs.is_empty() {
                     "no sleeves".to_string()
@@ -111,7 +147,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     )
                 };
                 println!(
-                    "{case:22} p95 {:.2} / {:.2} %  max {:5.2} %  stretch p95 {:.2} max {:5.1} %  pen {:.2} mm  {sleeves}  {:.0} fps",
+                    "{case:22} {:5} v  p95 {:.2} / {:.2} %  max {:5.2} %  stretch p95 {:.2} max {:5.1} %  pen {:.2} mm  {sleeves}  {:.0} fps",
+                    summary.vertices,
                     100.0 * summary.strain_p95_worst,
                     100.0 * summary.strain_p95_mean,
                     100.0 * summary.strain_max,
