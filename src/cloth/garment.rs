@@ -1092,8 +1092,11 @@ fn finish(
 /// slide) while dressing also lengthened every edge it stretched by more than 2 % (a cut fitted
 /// to the first pose, up to twice the cut length): the walk's T-shirts stayed within the targets
 /// (p95 0.9–1.7 %, maxima 9.0–10.0 %) but the kick's did not (p95 1.8–3.3 %, maxima 12–27 %,
-/// the armhole's back seam stretched as the arms swing): not kept. A sleeve that keeps its length on
-/// a lowered or raised arm needs a shirt cut with the arms lowered (not done).
+/// the armhole's back seam stretched as the arms swing): not kept. Nor was cutting and dressing
+/// from a rest pose with the upper arms lowered 20° or 35° (walk within the targets, the kick's
+/// raised arms stretched it: p95 2.5–3.9 %, maxima 14–20 %). A sleeve that keeps its length on a
+/// lowered and a raised arm needs more cloth where the arm bends (a sleeve cap, underarm ease),
+/// not only another cutting pose (not done).
 pub const SLEEVE_CUFF_REACH_CM: f32 = 5.0;
 
 fn tshirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentError> {
