@@ -7,8 +7,9 @@
 //! timing; criterion then times simulating the whole clip from that state and reports frames/s as
 //! its throughput. Before timing, each case prints its quality summary (edge strain, penetration;
 //! the dressed first frame included) from `suitcap::cloth::solver::run_motion`; so does, untimed,
-//! the quality mode of `suitcap run` and `drape` (80 substeps, 1 cm edges) for each clip and garment. Targets (issue 6): 4,000 vertices ≥ 60 frames/s,
-//! 2,000 ≥ 120; strain p95 ≤ 2 %, max ≤ 10 %; no vertex deeper than 2 mm in a capsule.
+//! the quality mode of `suitcap run` and `drape` (80 substeps, 1 cm edges) for each clip and
+//! garment. Targets (issue 6): 4,000 vertices ≥ 60 frames/s, 2,000 ≥ 120; strain p95 ≤ 2 %,
+//! max ≤ 10 %; no vertex deeper than 2 mm in a capsule.
 
 use std::path::Path;
 

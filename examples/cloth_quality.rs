@@ -3,11 +3,11 @@
 //!
 //! Prints `run_motion`'s summary for walk 02_01 and kick 10_03, T-shirt and dress at about 2,000
 //! and 4,000 vertices (the same cases as `cargo bench --bench cloth`), and how far the T-shirt's
-//! sleeve ends (its cuffs) got from the arm. The dressed first frame counts like the others. With `-v`, also where the
-//! worst frame's top 5 % of edges lie: stretched or compressed, rest length, nearest body part,
-//! height band; how many frames have a largest strain above 5 / 10 / 20 %; and, in the frame with
-//! the largest strain, the edges above 10 % with the two capsules nearest each end (signed
-//! distance, cm). The filter keeps the cases whose name (`kick/dress/4000`, …) contains it.
+//! sleeve ends (its cuffs) got from the arm. The dressed first frame counts like the others. With
+//! `-v`, also where the worst frame's top 5 % of edges lie: stretched or compressed, rest length,
+//! nearest body part, height band; how many frames have a largest strain above 5 / 10 / 20 %;
+//! and, in the frame with the largest strain, the edges above 10 % with the two capsules nearest
+//! each end (signed distance, cm). The filter keeps the cases whose name (`kick/dress/4000`, …) contains it.
 //!
 //! Environment overrides of the live settings, for experiments: `CLOTH_SUBSTEPS`, `CLOTH_SWEEPS`,
 //! `CLOTH_RHO` (Chebyshev ρ, 0 = plain sweeps), `CLOTH_LIMIT` (strain limit, 0 = off),

@@ -82,16 +82,17 @@
 //!      on an arm ([`collision_group`](super::proxies::collision_group)) then meets the arms, and
 //!      the trunk again if an arm pushed it in. Trunk cloth ignores the arms and the sleeve enters
 //!      them over a 6 cm ramp, because the body's hanging arms overlap its torso by several
-//!      centimetres and no cloth position is outside both. Sleeve cloth within 2 cm of the trunk
-//!      may also lie inside an arm, from 6 cm deep on the trunk's surface to nothing 2 cm off it
-//!      ([`buried_arm_allowance`]): before, the trunk won on its surface and the arm pushed
-//!      everything else out at once, so where a lowered arm sank into the chest one armpit vertex
-//!      stayed on the trunk inside the arm while its neighbour, 3 mm off the trunk, went out to
-//!      the arm's far side. With the quality mode's 1 cm edges that tore armpit edges to 244 %
-//!      (the dressed first frame of the quick start's kick) and 583 % (walk 02_01), and the live
-//!      T-shirt on CMU 05_12's dance to 135–271 %, where no strain limit could help, the
-//!      collisions undoing it every round. (A fade over 1 cm instead of 2 cm left the kick's
-//!      4,000-vertex T-shirt at 10.6 %.) The README's try-on section has the figures;
+//!      centimetres and no cloth position is outside both. Arm cloth (a sleeve, a dress's armhole)
+//!      within 2 cm of the trunk may also lie inside an arm, from 6 cm deep on the trunk's
+//!      surface to nothing 2 cm off it ([`buried_arm_allowance`]): before, the trunk won on its
+//!      surface and the arm pushed everything else out at once, so where a lowered arm sank into
+//!      the chest one armpit vertex stayed on the trunk inside the arm while its neighbour, 3 mm
+//!      off the trunk, went out to the arm's far side. With the quality mode's 1 cm edges that
+//!      tore armpit edges to 244 % (the dressed first frame of the quick start's kick) and 583 %
+//!      (walk 02_01), and the live T-shirt on CMU 05_12's dance to 135–271 %, where no strain
+//!      limit could help, the collisions undoing it every round. (A fade over 1 cm instead of 2 cm
+//!      left the kick's 4,000-vertex T-shirt at 10.6 %.) The README's try-on section has the
+//!      figures;
 //!    - **strain limit** (Provot 1995, "Deformation constraints in a mass-spring model to describe
 //!      rigid cloth behavior"): the edges still more than `strain_limit` (9 %) longer or shorter
 //!      than at rest are found, projected back onto that bound four times, a vertex in contact
@@ -101,8 +102,8 @@
 //!      round meets the trunk only: where a sleeve (or a dress's armhole) ramps into an arm, the
 //!      arm's push moved one end of an edge further out than the other after the limit had set it
 //!      (on CMU 13_39's jump the 4,000-vertex dress kept 13.0 % and the quality T-shirt 11.1 %;
-//!      now 9.0 % and 9.2 %; without the arms in every round the jump's T-shirt had 17.3 %). One XPBD
-//!      iteration leaves the bulk of the edges within 2 %, but a few edges where a capsule pushes
+//!      now 9.0 % and 9.2 %; without the arms in every round the jump's T-shirt had 17.3 %). One
+//!      XPBD iteration leaves the bulk of the edges within 2 %, but a few edges where a capsule pushes
 //!      one end and not the other reached 20–50 % on the kick: the armpit, where trunk cloth lies
 //!      inside an arm sunk into the chest while the arm pushes the sleeve's ramp vertices out, and
 //!      the skirt over a raised thigh. The bound is 9 %, not the 10 % the issue allows, because the
@@ -1697,10 +1698,6 @@ fn interleave<T: Copy, const K: usize>(
     out
 }
 
-/// The moves of an edge's two ends `i → j` (`d = xⱼ − xᵢ`, `r2` = its squared length over the
-/// squared rest length) that put it back on the strain limit's bound, `1 ± limit` times the rest
-/// length, shared in proportion to the weights; `None` when it is within the bound or neither end
-/// may move.
 /// How deep arm cloth `gap` cm off the trunk's collision surface may lie inside an arm capsule:
 /// [`ARM_RAMP_CM`] on the surface, nothing from [`BURIED_ARM_GAP_CM`] off. The body's arms sink
 /// into its chest and hips; where they do, cloth on the trunk is left inside the arm (the trunk
@@ -1711,6 +1708,10 @@ fn buried_arm_allowance(gap: f32) -> f32 {
     (ARM_RAMP_CM * (1.0 - gap / BURIED_ARM_GAP_CM)).clamp(0.0, ARM_RAMP_CM)
 }
 
+/// The moves of an edge's two ends `i → j` (`d = xⱼ − xᵢ`, `r2` = its squared length over the
+/// squared rest length) that put it back on the strain limit's bound, `1 ± limit` times the rest
+/// length, shared in proportion to the weights; `None` when it is within the bound or neither end
+/// may move.
 fn limit_projection(d: Vec3A, r2: f32, wi: f32, wj: f32, limit: f32) -> Option<(Vec3A, Vec3A)> {
     let (lo, hi) = (1.0 - limit, 1.0 + limit);
     if (r2 <= hi * hi && r2 >= lo * lo) || wi + wj <= 0.0 || r2 <= 0.0 {
