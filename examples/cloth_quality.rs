@@ -18,7 +18,8 @@
 //! substeps, and the garment at its 1 cm edges instead of the vertex counts). `CLOTH_CLIP`: another
 //! BVH file instead of the two clips, from its first frame; `CLOTH_SUBJECT`: another built-in
 //! subject than chidi, or `motion` for the clip's own skeleton at girth 1 (what `suitcap drape`
-//! wears without masks). The frames/s printed are from `run_motion`'s
+//! wears without masks). `CLOTH_GARMENTS`: other garments than the T-shirt and the dress, e.g.
+//! `skirt`. The frames/s printed are from `run_motion`'s
 //! stepping time: one run, noisy; use `cargo bench --bench cloth` for speed.
 
 use std::path::Path;
@@ -98,6 +99,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             FIRST_FRAME,
         ),
     };
+    // Garments: the bench's T-shirt and dress, or those named in CLOTH_GARMENTS (e.g. `skirt`).
+    let kinds: Vec<GarmentKind> = match std::env::var("CLOTH_GARMENTS") {
+        Ok(names) => names
+            .split(',')
+            .map(|n| n.trim().parse())
+            .collect::<Result<_, _>>()?,
+        Err(_) => vec![GarmentKind::TShirt, GarmentKind::Dress],
+    };
     // The quality mode's garment has one size (its edge length), not a vertex count.
     let counts = if quality_mode { vec![0] } else { counts };
     for (clip_name, clip) in clips {
@@ -114,7 +123,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (frames, _) =
             rig.scale_motion(&motion)
                 .resample(first_frame, None, settings.fps as f64)?;
-        for kind in [GarmentKind::TShirt, GarmentKind::Dress] {
+        for &kind in &kinds {
             for &target in &counts {
                 let size = if quality_mode {
                     "quality".to_string()
