@@ -8,7 +8,7 @@
 //! its throughput. Before timing, each case prints its quality summary (edge strain, penetration;
 //! the dressed first frame included) from `suitcap::cloth::solver::run_motion`; so does, untimed,
 //! the quality mode of `suitcap run` and `drape` (80 substeps, 1 cm edges) for each clip and
-//! garment. Targets (issue 6): 4,000 vertices ≥ 60 frames/s, 2,000 ≥ 120; strain p95 ≤ 2 %,
+//! garment, and the skirt (live at both sizes and quality mode; untimed). Targets (issue 6): 4,000 vertices ≥ 60 frames/s, 2,000 ≥ 120; strain p95 ≤ 2 %,
 //! max ≤ 10 %; no vertex deeper than 2 mm in a capsule.
 
 use std::path::Path;
@@ -45,23 +45,30 @@ fn bench(c: &mut Criterion) {
             .scale_motion(&motion)
             .resample(FIRST_FRAME, None, settings.fps as f64)
             .expect("resample");
-        for kind in [GarmentKind::TShirt, GarmentKind::Dress] {
-            let quality = SolverSettings::quality();
+        // Quality figures: the dressed garment run over the clip, its summary printed.
+        let report = |label: String, mesh: &GarmentMesh, settings: &SolverSettings| {
+            let mut cloth = Cloth::new(mesh, &material, settings, &rig).expect("cloth");
+            let summary = run_motion(&rig, &mut cloth, &frames, |_, _, _| {}).expect("simulate");
+            println!("{clip_name}, {label}: {summary}");
+        };
+        for target in [2000usize, 4000] {
+            let (mesh, edge) =
+                GarmentMesh::with_vertex_count(GarmentKind::Skirt, &rig, target, 2.5)
+                    .expect("garment");
+            report(format!("{edge:.2} cm edges (untimed)"), &mesh, &settings);
+        }
+        let quality = SolverSettings::quality();
+        for kind in [GarmentKind::TShirt, GarmentKind::Dress, GarmentKind::Skirt] {
             let mesh =
                 GarmentMesh::generate(kind, &rig, &GarmentParams::quality()).expect("garment");
-            let mut cloth = Cloth::new(&mesh, &material, &quality, &rig).expect("cloth");
-            let summary = run_motion(&rig, &mut cloth, &frames, |_, _, _| {}).expect("simulate");
-            println!(
-                "{clip_name}, quality mode ({} substeps, 1 cm edges): {summary}",
-                quality.substeps
-            );
+            let label = format!("quality mode ({} substeps, 1 cm edges)", quality.substeps);
+            report(label, &mesh, &quality);
+        }
+        for kind in [GarmentKind::TShirt, GarmentKind::Dress] {
             for target in [2000usize, 4000] {
                 let (mesh, edge) =
                     GarmentMesh::with_vertex_count(kind, &rig, target, 2.5).expect("garment");
-                let mut cloth = Cloth::new(&mesh, &material, &settings, &rig).expect("cloth");
-                let summary =
-                    run_motion(&rig, &mut cloth, &frames, |_, _, _| {}).expect("simulate");
-                println!("{clip_name}, {edge:.2} cm edges: {summary}");
+                report(format!("{edge:.2} cm edges"), &mesh, &settings);
                 let mut dressed = Cloth::new(&mesh, &material, &settings, &rig).expect("cloth");
                 dressed.dress(&rig, frames.frame(0));
                 let steps = frames.frame_count() - 1;
