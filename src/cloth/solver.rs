@@ -193,6 +193,9 @@ const INTERLEAVE_WINDOW: usize = 256;
 /// to 1 for cloth this much nearer an arm than the trunk, cm.
 const ARM_RAMP_CM: f32 = 6.0;
 
+/// Cloth this close to the trunk's collision surface lies on the trunk, cm.
+const ON_TRUNK_CM: f32 = 0.05;
+
 /// Where an arm lies against or inside the trunk, arm cloth this near the trunk may lie inside the
 /// arm: up to [`ARM_RAMP_CM`] on the trunk's surface, falling linearly to nothing at this gap, cm
 /// ([`buried_arm_allowance`]).
@@ -1514,13 +1517,12 @@ impl Cloth {
                 trunk_distance = d;
             }
         }
-        let on_trunk = trunk_distance < offset + 0.05;
-        if arms && weight > 0.0 && !on_trunk {
+        let near_trunk = arm_allowance_by_trunk(trunk_distance, offset);
+        if arms && weight > 0.0 && near_trunk.is_finite() {
             // Cloth on the ramp between trunk and arm cloth may lie inside an arm by up to
             // (1 − weight) × ARM_RAMP_CM: the sleeve enters the arm gradually; and cloth near the
             // trunk may lie in an arm pressed against it (the trunk wins on its surface).
-            let allowed =
-                ((1.0 - weight) * ARM_RAMP_CM).max(buried_arm_allowance(trunk_distance - offset));
+            let allowed = ((1.0 - weight) * ARM_RAMP_CM).max(near_trunk);
             let mut pushed = false;
             for &c in list.iter().filter(|c| !trunk(c)) {
                 pushed |= resolve(&mut p, c as usize, allowed, &mut deepest).0;
@@ -1597,11 +1599,7 @@ impl Cloth {
                 .filter(|(b, _, g)| *g == GROUP_TRUNK && b.expanded(offset).contains(Vec3::from(p)))
                 .map(|(_, c, _)| c.distance(p))
                 .fold(f32::INFINITY, f32::min);
-            let allowed = if trunk_distance <= offset + 0.05 {
-                f32::INFINITY
-            } else {
-                buried_arm_allowance(trunk_distance - offset)
-            };
+            let allowed = arm_allowance_by_trunk(trunk_distance, offset);
             let (mut own, mut other) = (0.0f32, 0.0f32);
             for (b, c, g) in &capsules {
                 if b.contains(Vec3::from(p)) {
@@ -1706,6 +1704,18 @@ fn interleave<T: Copy, const K: usize>(
 /// over the first centimetres off the trunk instead.
 fn buried_arm_allowance(gap: f32) -> f32 {
     (ARM_RAMP_CM * (1.0 - gap / BURIED_ARM_GAP_CM)).clamp(0.0, ARM_RAMP_CM)
+}
+
+/// How deep arm cloth whose nearest trunk capsule is `trunk_distance` cm away may lie inside an arm
+/// capsule, the collisions keeping cloth `offset` off the capsules: without bound on the trunk
+/// (within [`ON_TRUNK_CM`] of its collision surface: the trunk wins), else
+/// [`buried_arm_allowance`]. The collisions and the penetration figure both go by it.
+fn arm_allowance_by_trunk(trunk_distance: f32, offset: f32) -> f32 {
+    if trunk_distance < offset + ON_TRUNK_CM {
+        f32::INFINITY
+    } else {
+        buried_arm_allowance(trunk_distance - offset)
+    }
 }
 
 /// The moves of an edge's two ends `i → j` (`d = xⱼ − xᵢ`, `r2` = its squared length over the
