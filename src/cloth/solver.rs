@@ -2528,6 +2528,13 @@ mod tests {
         (clip, BodyRig::new(skeleton, body, DEFAULT_MARGIN_CM))
     }
 
+    /// `mesh` in the medium fabric at the live settings, dressed and run over `clip`.
+    fn run_live(mesh: &GarmentMesh, rig: &BodyRig, clip: &Motion) -> QualitySummary {
+        let mut cloth =
+            Cloth::new(mesh, &Material::medium(), &SolverSettings::live(), rig).expect("cloth");
+        run_motion(rig, &mut cloth, clip, |_, _, _| {}).expect("run")
+    }
+
     #[test]
     fn a_fine_sleeve_pressed_between_arm_and_chest_does_not_tear_while_dressing() {
         // The quick start's kick starts crouched, arms low and sunk into the chest. Dressing the
@@ -2554,9 +2561,7 @@ mod tests {
         let (clip, rig) = clip_and_its_rig("tests/data/mocap/synth_05_12_dance_dana.bvh");
         let mesh = GarmentMesh::generate(GarmentKind::TShirt, &rig, &GarmentParams::live())
             .expect("tshirt");
-        let mut cloth =
-            Cloth::new(&mesh, &Material::medium(), &SolverSettings::live(), &rig).expect("cloth");
-        let summary = run_motion(&rig, &mut cloth, &clip, |_, _, _| {}).expect("run");
+        let summary = run_live(&mesh, &rig, &clip);
         assert!(
             summary.strain_max < 0.10,
             "{} %",
@@ -2573,9 +2578,7 @@ mod tests {
         let (clip, rig) = clip_and_its_rig("tests/data/mocap/synth_13_39_jump_chidi.bvh");
         let (mesh, _) =
             GarmentMesh::with_vertex_count(GarmentKind::Dress, &rig, 4000, 2.5).expect("dress");
-        let mut cloth =
-            Cloth::new(&mesh, &Material::medium(), &SolverSettings::live(), &rig).expect("cloth");
-        let summary = run_motion(&rig, &mut cloth, &clip, |_, _, _| {}).expect("run");
+        let summary = run_live(&mesh, &rig, &clip);
         assert!(
             summary.strain_max < 0.10,
             "{} %",
