@@ -17,7 +17,7 @@
 //! - [`obj`]: garments from OBJ files.
 //! - [`topology`]: edges, hinges, boundary loops of triangle meshes.
 //! - [`solver`]: the XPBD solver, quality figures, a whole-motion run for the command line.
-//! - `stretch` (private): the solver's stretch sweep, four vertex-disjoint edges at a time.
+//! - `stretch` (private): the solver's stretch sweep, eight vertex-disjoint edges at a time.
 //!
 //! Units: centimetres, grams, seconds; world Y up; gravity −981 cm/s².
 

@@ -52,10 +52,12 @@
 //!      neighbours share no vertex ([`interleave`]): projected in mesh order, each waited for the
 //!      square root and division of the one before, and the sweeps took two thirds of the frame;
 //!      interleaved, the processor overlaps them and a frame takes about half the time. Runs of
-//!      four such vertex-disjoint neighbours are then projected at once, one per SIMD lane
+//!      eight such vertex-disjoint neighbours are then projected at once, one per SIMD lane
 //!      ([`stretch`](super::stretch); the positions are bit-identical to projecting them one by
-//!      one): the eight cases of `cargo bench --bench cloth` ran at 1.31× the frame rate
-//!      (alternated runs of both builds on 2026-12-02, two each). Compressed
+//!      one): with that, the SIMD box test in the collisions and the strain limit's SIMD scan,
+//!      the eight cases of `cargo bench --bench cloth` ran at 1.43× the frame rate (summed;
+//!      alternated runs of both builds on 2026-12-02, two each; 1.31× with blocks of four).
+//!      Compressed
 //!      edges get `compression` (0.8) of their correction: cloth buckles rather than compresses, a
 //!      2 cm mesh cannot show the buckles, and full-strength compression projections were seen to
 //!      pump energy into crumpled regions (and on the kick they raised the worst frame's
@@ -188,7 +190,7 @@ use super::capsule::{Aabb, PreparedCapsule};
 use super::garment::{Anchor, GarmentError, GarmentKind, GarmentMesh, GarmentParams};
 use super::material::Material;
 use super::proxies::{BodyPose, BodyRig, DEFAULT_MARGIN_CM, GROUP_ARMS, GROUP_TRUNK};
-use super::stretch::{self, DistanceConstraint, EdgeQuads};
+use super::stretch::{self, DistanceConstraint, EdgeBlocks};
 use super::topology::{hinges, unique_edges, Adjacency};
 
 /// Constraints reordered together by [`interleave`].
@@ -465,8 +467,8 @@ pub struct Cloth {
     /// Capsule indices of the cuffs' bones.
     cuff_capsules: Vec<u16>,
     edges: Vec<Edge>,
-    /// `edges` packed four at a time for the stretch sweeps.
-    edge_quads: EdgeQuads,
+    /// `edges` packed eight at a time for the stretch sweeps.
+    edge_blocks: EdgeBlocks,
     bends: Vec<Bend>,
     tethers: Vec<Tether>,
     // State.
@@ -659,7 +661,7 @@ impl Cloth {
             cuffs,
             cuff_capsules,
             edges: Vec::new(),
-            edge_quads: EdgeQuads::default(),
+            edge_blocks: EdgeBlocks::default(),
             bends: Vec::new(),
             tethers: Vec::new(),
             x: rest.clone(),
@@ -820,7 +822,7 @@ impl Cloth {
                 cj: e.cj,
             })
             .collect();
-        self.edge_quads = EdgeQuads::pack(&constraints);
+        self.edge_blocks = EdgeBlocks::pack(&constraints);
         // Each vertex's edges (indices into `self.edges`), for the strain limit's later rounds.
         let ends: Vec<[u32; 2]> = self.edges.iter().map(|e| [e.i, e.j]).collect();
         self.incidence = Adjacency::new(n, &ends);
@@ -1374,7 +1376,7 @@ impl Cloth {
 
     fn solve_stretch(&mut self) {
         let compression = self.settings.compression.clamp(0.0, 1.0);
-        stretch::sweep(&mut self.x, &self.edge_quads, compression);
+        stretch::sweep(&mut self.x, &self.edge_blocks, compression);
     }
 
     fn solve_bending(&mut self) {
@@ -1414,7 +1416,7 @@ impl Cloth {
             r2 > hi2 || r2 < lo2
         };
         self.limit_edges.clear();
-        stretch::outside_bounds(&self.x, &self.edge_quads, lo2, hi2, &mut self.limit_edges);
+        stretch::outside_bounds(&self.x, &self.edge_blocks, lo2, hi2, &mut self.limit_edges);
         self.limit_seen.resize(self.edges.len(), 0);
         self.limit_moved_at.resize(self.x.len(), 0);
         for round in 0..STRAIN_LIMIT_PASSES {

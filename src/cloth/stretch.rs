@@ -1,20 +1,30 @@
-//! The stretch constraints' Gauss–Seidel sweep, four edges at a time.
+//! The stretch constraints' Gauss–Seidel sweep, eight edges at a time.
 //!
 //! The solver hands this module its stretch constraints in sweep order (anchors outward,
-//! interleaved so that neighbours share no vertex) and gets back [`EdgeQuads`]: runs of up to
-//! four consecutive constraints that share no vertex, packed lane by lane. [`sweep`] projects one
-//! quad per step: the eight end points are loaded, transposed to x, y and z rows, projected in
-//! the four lanes at once and stored back. Because the edges of a quad share no vertex, this is the
-//! same computation as projecting them one after another, in the same arithmetic per edge: the
+//! interleaved so that neighbours share no vertex) and gets back [`EdgeBlocks`]: runs of up to
+//! eight consecutive constraints that share no vertex, packed lane by lane. [`sweep`] projects
+//! one block per step: the end points are loaded, transposed to x, y and z rows, projected in all
+//! lanes at once and stored back. Because the edges of a block share no vertex, this is the same
+//! computation as projecting them one after another, in the same arithmetic per edge: the
 //! positions are bit-identical to a scalar sweep in the same order (a test checks it), only
 //! cheaper. The sweeps were about half of the solver's time, each projection a dot product across
-//! one `Vec3A`'s lanes and a division for one edge; on x86-64 the quad kernel uses SSE2, which
-//! every x86-64 processor has, and elsewhere the same quads are projected lane by lane.
+//! one `Vec3A`'s lanes and a division for one edge, one waiting for the next.
+//!
+//! On x86-64 a block is one pass of 8-lane AVX where the processor has it (checked at run time)
+//! and two interleaved 4-lane SSE2 passes otherwise (SSE2 is part of every x86-64 processor);
+//! elsewhere the lanes are projected one by one. A block of eight rather than four because one
+//! block's chain of dependent operations (loads, transposes, the division, stores: some 60
+//! cycles) is what limits the sweep, not the count of instructions: with blocks of four in SSE2
+//! the sweep ran 1.45× faster than edge by edge and spent most of its time waiting on the
+//! division.
 //!
 //! Each projection computes its correction `(l − l₀)/l` from `l²/l₀²` without a square root
 //! ([`stretch_correction`]).
 
 use glam::Vec3A;
+
+/// Constraints per block.
+const LANES: usize = 8;
 
 /// One stretch (distance) constraint as the sweep needs it: the ends `i → j`, `1/l₀²`, and the
 /// share of the correction each end takes (`wᵢ/(wᵢ + wⱼ + α/h²)`, the same for `j`).
@@ -27,42 +37,43 @@ pub(super) struct DistanceConstraint {
     pub cj: f32,
 }
 
-/// Four constraints lane by lane. Lanes past a short quad's last constraint repeat its first
-/// vertex at both ends with zero shares: they move nothing, and are stored before the real lanes.
+/// Up to [`LANES`] vertex-disjoint constraints lane by lane. The lanes past a short block's last
+/// constraint repeat its first vertex at both ends with zero shares; they are computed and never
+/// stored.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(16))]
-pub(super) struct EdgeQuad {
-    i: [u32; 4],
-    j: [u32; 4],
-    inv_rest2: [f32; 4],
-    ci: [f32; 4],
-    cj: [f32; 4],
+#[repr(C, align(32))]
+struct EdgeBlock {
+    i: [u32; LANES],
+    j: [u32; LANES],
+    inv_rest2: [f32; LANES],
+    ci: [f32; LANES],
+    cj: [f32; LANES],
 }
 
-/// A sweep's constraints packed into quads of vertex-disjoint neighbours, in sweep order.
+/// A sweep's constraints packed into blocks of vertex-disjoint neighbours, in sweep order.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub(super) struct EdgeQuads {
-    quads: Vec<EdgeQuad>,
-    /// The index of each quad's first constraint, and the number of constraints at the end.
+pub(super) struct EdgeBlocks {
+    blocks: Vec<EdgeBlock>,
+    /// The index of each block's first constraint, and the number of constraints at the end.
     starts: Vec<u32>,
 }
 
-impl EdgeQuads {
-    /// Packs `constraints`, in order, into quads: a quad takes the next constraint unless it is
+impl EdgeBlocks {
+    /// Packs `constraints`, in order, into blocks: a block takes the next constraint unless it is
     /// full or already holds one of that constraint's vertices. Interleaved constraints fill
-    /// almost every quad.
-    pub fn pack(constraints: &[DistanceConstraint]) -> EdgeQuads {
-        let mut quads = Vec::with_capacity(constraints.len() / 4 + 1);
-        let mut starts = Vec::with_capacity(constraints.len() / 4 + 2);
-        let mut lanes: Vec<DistanceConstraint> = Vec::with_capacity(4);
+    /// most blocks.
+    pub fn pack(constraints: &[DistanceConstraint]) -> EdgeBlocks {
+        let mut blocks = Vec::with_capacity(constraints.len() / LANES + 1);
+        let mut starts = Vec::with_capacity(constraints.len() / LANES + 2);
+        let mut lanes: Vec<DistanceConstraint> = Vec::with_capacity(LANES);
         let shares_a_vertex = |lanes: &[DistanceConstraint], c: &DistanceConstraint| {
             lanes
                 .iter()
                 .any(|l| l.i == c.i || l.i == c.j || l.j == c.i || l.j == c.j)
         };
         for (k, c) in constraints.iter().enumerate() {
-            if lanes.len() == 4 || shares_a_vertex(&lanes, c) {
-                quads.push(quad(&lanes));
+            if lanes.len() == LANES || shares_a_vertex(&lanes, c) {
+                blocks.push(block(&lanes));
                 lanes.clear();
             }
             if lanes.is_empty() {
@@ -71,15 +82,23 @@ impl EdgeQuads {
             lanes.push(*c);
         }
         if !lanes.is_empty() {
-            quads.push(quad(&lanes));
+            blocks.push(block(&lanes));
         }
         starts.push(constraints.len() as u32);
-        EdgeQuads { quads, starts }
+        EdgeBlocks { blocks, starts }
+    }
+
+    /// Each block with its first constraint's index and its count of constraints.
+    fn iter(&self) -> impl Iterator<Item = (&EdgeBlock, u32, usize)> {
+        self.blocks
+            .iter()
+            .zip(self.starts.windows(2))
+            .map(|(b, s)| (b, s[0], (s[1] - s[0]) as usize))
     }
 }
 
-/// Packs one to four vertex-disjoint constraints; the lanes past them move nothing.
-fn quad(lanes: &[DistanceConstraint]) -> EdgeQuad {
+/// Packs one to [`LANES`] vertex-disjoint constraints.
+fn block(lanes: &[DistanceConstraint]) -> EdgeBlock {
     let first = lanes[0];
     let idle = DistanceConstraint {
         i: first.i,
@@ -89,12 +108,12 @@ fn quad(lanes: &[DistanceConstraint]) -> EdgeQuad {
         cj: 0.0,
     };
     let lane = |l: usize| lanes.get(l).copied().unwrap_or(idle);
-    EdgeQuad {
-        i: [0, 1, 2, 3].map(|l| lane(l).i),
-        j: [0, 1, 2, 3].map(|l| lane(l).j),
-        inv_rest2: [0, 1, 2, 3].map(|l| lane(l).inv_rest2),
-        ci: [0, 1, 2, 3].map(|l| lane(l).ci),
-        cj: [0, 1, 2, 3].map(|l| lane(l).cj),
+    EdgeBlock {
+        i: std::array::from_fn(|l| lane(l).i),
+        j: std::array::from_fn(|l| lane(l).j),
+        inv_rest2: std::array::from_fn(|l| lane(l).inv_rest2),
+        ci: std::array::from_fn(|l| lane(l).ci),
+        cj: std::array::from_fn(|l| lane(l).cj),
     }
 }
 
@@ -114,15 +133,23 @@ pub(super) fn stretch_correction(u: f32) -> f32 {
     2.0 * (u - 1.0) / (1.0 + 3.0 * u)
 }
 
-/// One Gauss–Seidel sweep over the quads, in order: each edge's ends move by `∓ d·c·s` (`d` the
+/// One Gauss–Seidel sweep over the blocks, in order: each edge's ends move by `∓ d·c·s` (`d` the
 /// edge vector, `s` [`stretch_correction`], times `compression` for a compressed edge).
 ///
-/// Panics if a quad names a vertex outside `x` (the solver builds both from the same mesh).
-pub(super) fn sweep(x: &mut [Vec3A], quads: &EdgeQuads, compression: f32) {
+/// Panics if a block names a vertex outside `x` (the solver builds both from the same mesh).
+pub(super) fn sweep(x: &mut [Vec3A], blocks: &EdgeBlocks, compression: f32) {
     #[cfg(target_arch = "x86_64")]
-    sse2::sweep(x, &quads.quads, compression);
+    {
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the processor has AVX (checked just above).
+            unsafe { x86::sweep_avx(x, blocks, compression) }
+        } else {
+            // SAFETY: SSE2 is part of the x86-64 baseline: every x86-64 processor has it.
+            unsafe { x86::sweep_sse2(x, blocks, compression) }
+        }
+    }
     #[cfg(not(target_arch = "x86_64"))]
-    sweep_lanes(x, &quads.quads, compression);
+    sweep_lanes(x, blocks, compression);
 }
 
 /// Appends to `out`, in order, the indices (into the packed constraints) of the edges whose
@@ -130,57 +157,62 @@ pub(super) fn sweep(x: &mut [Vec3A], quads: &EdgeQuads, compression: f32) {
 /// limit's first look at every edge.
 pub(super) fn outside_bounds(
     x: &[Vec3A],
-    quads: &EdgeQuads,
+    blocks: &EdgeBlocks,
     lo2: f32,
     hi2: f32,
     out: &mut Vec<u32>,
 ) {
     #[cfg(target_arch = "x86_64")]
-    sse2::outside_bounds(x, quads, lo2, hi2, out);
+    // SAFETY: SSE2 is part of the x86-64 baseline.
+    unsafe {
+        x86::outside_bounds_sse2(x, blocks, lo2, hi2, out)
+    }
     #[cfg(not(target_arch = "x86_64"))]
-    outside_bounds_lanes(x, quads, lo2, hi2, out);
+    outside_bounds_lanes(x, blocks, lo2, hi2, out);
 }
 
 /// [`outside_bounds`] one lane at a time.
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
-fn outside_bounds_lanes(x: &[Vec3A], quads: &EdgeQuads, lo2: f32, hi2: f32, out: &mut Vec<u32>) {
-    for (q, start) in quads.quads.iter().zip(quads.starts.windows(2)) {
-        for l in 0..(start[1] - start[0]) as usize {
-            let d = x[q.j[l] as usize] - x[q.i[l] as usize];
-            let r2 = d.length_squared() * q.inv_rest2[l];
+fn outside_bounds_lanes(x: &[Vec3A], blocks: &EdgeBlocks, lo2: f32, hi2: f32, out: &mut Vec<u32>) {
+    for (b, start, count) in blocks.iter() {
+        for l in 0..count {
+            let d = x[b.j[l] as usize] - x[b.i[l] as usize];
+            let r2 = d.length_squared() * b.inv_rest2[l];
             if r2 > hi2 || r2 < lo2 {
-                out.push(start[0] + l as u32);
+                out.push(start + l as u32);
             }
         }
     }
 }
 
-/// [`sweep`] one lane at a time, the idle lanes first: the portable path, and the reference the
-/// SSE2 kernel is tested against.
+/// [`sweep`] one lane at a time: the portable path, and the reference the SIMD kernels are
+/// tested against.
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
-fn sweep_lanes(x: &mut [Vec3A], quads: &[EdgeQuad], compression: f32) {
-    for q in quads {
-        for l in (0..4).rev() {
-            let (i, j) = (q.i[l] as usize, q.j[l] as usize);
+fn sweep_lanes(x: &mut [Vec3A], blocks: &EdgeBlocks, compression: f32) {
+    for (b, _, count) in blocks.iter() {
+        for l in 0..count {
+            let (i, j) = (b.i[l] as usize, b.j[l] as usize);
             let d = x[j] - x[i];
-            let mut s = stretch_correction(d.length_squared() * q.inv_rest2[l]);
+            let mut s = stretch_correction(d.length_squared() * b.inv_rest2[l]);
             if s < 0.0 {
                 s *= compression;
             }
-            x[i] += d * (q.ci[l] * s);
-            x[j] -= d * (q.cj[l] * s);
+            x[i] += d * (b.ci[l] * s);
+            x[j] -= d * (b.cj[l] * s);
         }
     }
 }
 
 #[cfg(target_arch = "x86_64")]
-mod sse2 {
-    //! The quad kernel on SSE2 (part of every x86-64 processor, so no run-time detection).
+mod x86 {
+    //! The block kernels: 8-lane AVX, and 4-lane SSE2 twice. The 256-bit unpacks and shuffles
+    //! work within each 128-bit half, so the AVX kernel is the SSE2 one on two quads at once:
+    //! lanes 0–3 in the low halves, 4–7 in the high ones.
     use std::arch::x86_64::*;
 
     use glam::Vec3A;
 
-    use super::{EdgeQuad, EdgeQuads};
+    use super::{EdgeBlocks, LANES};
 
     /// Four points' x, y and z as rows (`_MM_TRANSPOSE4_PS` without the fourth row).
     #[inline]
@@ -214,99 +246,200 @@ mod sse2 {
         ]
     }
 
+    /// Lanes `from..from + 4` of `a`.
     #[inline]
     #[target_feature(enable = "sse2")]
-    fn load(a: &[f32; 4]) -> __m128 {
-        _mm_set_ps(a[3], a[2], a[1], a[0])
-    }
-
-    pub(super) fn sweep(x: &mut [Vec3A], quads: &[EdgeQuad], compression: f32) {
-        // SAFETY: SSE2 is part of the x86-64 baseline: every x86-64 processor has it.
-        unsafe { sweep_sse2(x, quads, compression) }
-    }
-
-    pub(super) fn outside_bounds(
-        x: &[Vec3A],
-        quads: &EdgeQuads,
-        lo2: f32,
-        hi2: f32,
-        out: &mut Vec<u32>,
-    ) {
-        // SAFETY: as in `sweep`.
-        unsafe { outside_bounds_sse2(x, quads, lo2, hi2, out) }
-    }
-
-    #[target_feature(enable = "sse2")]
-    fn outside_bounds_sse2(x: &[Vec3A], quads: &EdgeQuads, lo2: f32, hi2: f32, out: &mut Vec<u32>) {
-        let (lo2, hi2) = (_mm_set1_ps(lo2), _mm_set1_ps(hi2));
-        for (q, start) in quads.quads.iter().zip(quads.starts.windows(2)) {
-            let [ix, iy, iz] = rows(q.i.map(|v| __m128::from(x[v as usize])));
-            let [jx, jy, jz] = rows(q.j.map(|v| __m128::from(x[v as usize])));
-            let r2 = _mm_mul_ps(
-                squared_lengths(_mm_sub_ps(jx, ix), _mm_sub_ps(jy, iy), _mm_sub_ps(jz, iz)),
-                load(&q.inv_rest2),
-            );
-            let out_of_bounds = _mm_or_ps(_mm_cmpgt_ps(r2, hi2), _mm_cmplt_ps(r2, lo2));
-            // Only the quad's real lanes (the idle ones have zero length).
-            let lanes = (1 << (start[1] - start[0])) - 1;
-            let mut bits = _mm_movemask_ps(out_of_bounds) & lanes;
-            while bits != 0 {
-                out.push(start[0] + bits.trailing_zeros());
-                bits &= bits - 1;
-            }
-        }
+    fn load4(a: &[f32; LANES], from: usize) -> __m128 {
+        _mm_set_ps(a[from + 3], a[from + 2], a[from + 1], a[from])
     }
 
     /// `(dx² + dy²) + dz²`, as glam's `Vec3A::length_squared` adds them.
     #[inline]
     #[target_feature(enable = "sse2")]
-    fn squared_lengths(dx: __m128, dy: __m128, dz: __m128) -> __m128 {
+    fn squared_lengths(d: [__m128; 3]) -> __m128 {
         _mm_add_ps(
-            _mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)),
-            _mm_mul_ps(dz, dz),
+            _mm_add_ps(_mm_mul_ps(d[0], d[0]), _mm_mul_ps(d[1], d[1])),
+            _mm_mul_ps(d[2], d[2]),
         )
     }
 
+    /// The projection of four edges whose ends are the rows `i` and `j`: their new ends.
+    #[inline]
     #[target_feature(enable = "sse2")]
-    fn sweep_sse2(x: &mut [Vec3A], quads: &[EdgeQuad], compression: f32) {
+    fn project4(
+        i: [__m128; 3],
+        j: [__m128; 3],
+        inv_rest2: __m128,
+        ci: __m128,
+        cj: __m128,
+        compression: __m128,
+    ) -> ([__m128; 4], [__m128; 4]) {
         let one = _mm_set1_ps(1.0);
-        let two = _mm_set1_ps(2.0);
-        let three = _mm_set1_ps(3.0);
-        let zero = _mm_setzero_ps();
-        let squash = _mm_set1_ps(compression);
-        for q in quads {
-            let pi = q.i.map(|v| __m128::from(x[v as usize]));
-            let pj = q.j.map(|v| __m128::from(x[v as usize]));
-            let [ix, iy, iz] = rows(pi);
-            let [jx, jy, jz] = rows(pj);
-            let (dx, dy, dz) = (_mm_sub_ps(jx, ix), _mm_sub_ps(jy, iy), _mm_sub_ps(jz, iz));
-            let u = _mm_mul_ps(squared_lengths(dx, dy, dz), load(&q.inv_rest2));
-            let s = _mm_div_ps(
-                _mm_mul_ps(two, _mm_sub_ps(u, one)),
-                _mm_add_ps(one, _mm_mul_ps(three, u)),
+        let d = [0, 1, 2].map(|k| _mm_sub_ps(j[k], i[k]));
+        let u = _mm_mul_ps(squared_lengths(d), inv_rest2);
+        // 2(u − 1)/(1 + 3u), as `stretch_correction` computes it.
+        let s = _mm_div_ps(
+            _mm_mul_ps(_mm_set1_ps(2.0), _mm_sub_ps(u, one)),
+            _mm_add_ps(one, _mm_mul_ps(_mm_set1_ps(3.0), u)),
+        );
+        let squashed = _mm_cmplt_ps(s, _mm_setzero_ps());
+        let s = _mm_or_ps(
+            _mm_and_ps(squashed, _mm_mul_ps(s, compression)),
+            _mm_andnot_ps(squashed, s),
+        );
+        let (si, sj) = (_mm_mul_ps(ci, s), _mm_mul_ps(cj, s));
+        (
+            points([0, 1, 2].map(|k| _mm_add_ps(i[k], _mm_mul_ps(d[k], si)))),
+            points([0, 1, 2].map(|k| _mm_sub_ps(j[k], _mm_mul_ps(d[k], sj)))),
+        )
+    }
+
+    /// [`super::sweep`] on SSE2: a block's two quads loaded, projected, then stored.
+    #[target_feature(enable = "sse2")]
+    pub(super) fn sweep_sse2(x: &mut [Vec3A], blocks: &EdgeBlocks, compression: f32) {
+        let compression = _mm_set1_ps(compression);
+        for (b, _, count) in blocks.iter() {
+            let ends = |ends: &[u32; LANES], from: usize| {
+                rows(std::array::from_fn(|l| {
+                    __m128::from(x[ends[from + l] as usize])
+                }))
+            };
+            let quad = |from: usize| {
+                project4(
+                    ends(&b.i, from),
+                    ends(&b.j, from),
+                    load4(&b.inv_rest2, from),
+                    load4(&b.ci, from),
+                    load4(&b.cj, from),
+                    compression,
+                )
+            };
+            let (low, high) = (quad(0), quad(4));
+            for l in 0..count {
+                let (new_i, new_j) = if l < 4 { &low } else { &high };
+                x[b.i[l] as usize] = Vec3A::from(new_i[l % 4]);
+                x[b.j[l] as usize] = Vec3A::from(new_j[l % 4]);
+            }
+        }
+    }
+
+    /// [`rows`] for eight points, lanes 0–3 in the low halves and 4–7 in the high ones.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn rows8(p: [__m256; 4]) -> [__m256; 3] {
+        let t0 = _mm256_unpacklo_ps(p[0], p[1]);
+        let t1 = _mm256_unpacklo_ps(p[2], p[3]);
+        let t2 = _mm256_unpackhi_ps(p[0], p[1]);
+        let t3 = _mm256_unpackhi_ps(p[2], p[3]);
+        [
+            _mm256_shuffle_ps::<0b01_00_01_00>(t0, t1),
+            _mm256_shuffle_ps::<0b11_10_11_10>(t0, t1),
+            _mm256_shuffle_ps::<0b01_00_01_00>(t2, t3),
+        ]
+    }
+
+    /// The inverse of [`rows8`].
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn points8(r: [__m256; 3]) -> [__m256; 4] {
+        let zero = _mm256_setzero_ps();
+        let t0 = _mm256_unpacklo_ps(r[0], r[1]);
+        let t1 = _mm256_unpacklo_ps(r[2], zero);
+        let t2 = _mm256_unpackhi_ps(r[0], r[1]);
+        let t3 = _mm256_unpackhi_ps(r[2], zero);
+        [
+            _mm256_shuffle_ps::<0b01_00_01_00>(t0, t1),
+            _mm256_shuffle_ps::<0b11_10_11_10>(t0, t1),
+            _mm256_shuffle_ps::<0b01_00_01_00>(t2, t3),
+            _mm256_shuffle_ps::<0b11_10_11_10>(t2, t3),
+        ]
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn load8(a: &[f32; LANES]) -> __m256 {
+        _mm256_set_ps(a[7], a[6], a[5], a[4], a[3], a[2], a[1], a[0])
+    }
+
+    /// [`super::sweep`] on AVX: one block per pass.
+    #[target_feature(enable = "avx")]
+    pub(super) fn sweep_avx(x: &mut [Vec3A], blocks: &EdgeBlocks, compression: f32) {
+        let one = _mm256_set1_ps(1.0);
+        let compression = _mm256_set1_ps(compression);
+        for (b, _, count) in blocks.iter() {
+            // Point k and point k + 4 in one register, for k = 0..4.
+            let ends = |ends: &[u32; LANES]| {
+                rows8(std::array::from_fn(|k| {
+                    _mm256_set_m128(
+                        __m128::from(x[ends[k + 4] as usize]),
+                        __m128::from(x[ends[k] as usize]),
+                    )
+                }))
+            };
+            let (i, j) = (ends(&b.i), ends(&b.j));
+            let d = [0, 1, 2].map(|k| _mm256_sub_ps(j[k], i[k]));
+            // (dx² + dy²) + dz², then 2(u − 1)/(1 + 3u): the arithmetic of the scalar sweep.
+            let l2 = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(d[0], d[0]), _mm256_mul_ps(d[1], d[1])),
+                _mm256_mul_ps(d[2], d[2]),
             );
-            let squashed = _mm_cmplt_ps(s, zero);
-            let s = _mm_or_ps(
-                _mm_and_ps(squashed, _mm_mul_ps(s, squash)),
-                _mm_andnot_ps(squashed, s),
+            let u = _mm256_mul_ps(l2, load8(&b.inv_rest2));
+            let s = _mm256_div_ps(
+                _mm256_mul_ps(_mm256_set1_ps(2.0), _mm256_sub_ps(u, one)),
+                _mm256_add_ps(one, _mm256_mul_ps(_mm256_set1_ps(3.0), u)),
             );
-            let si = _mm_mul_ps(load(&q.ci), s);
-            let sj = _mm_mul_ps(load(&q.cj), s);
-            let ni = points([
-                _mm_add_ps(ix, _mm_mul_ps(dx, si)),
-                _mm_add_ps(iy, _mm_mul_ps(dy, si)),
-                _mm_add_ps(iz, _mm_mul_ps(dz, si)),
-            ]);
-            let nj = points([
-                _mm_sub_ps(jx, _mm_mul_ps(dx, sj)),
-                _mm_sub_ps(jy, _mm_mul_ps(dy, sj)),
-                _mm_sub_ps(jz, _mm_mul_ps(dz, sj)),
-            ]);
-            // Idle lanes (past a short quad's end) rewrite lane 0's first vertex unchanged, so
-            // they are stored first and lane 0 last.
-            for l in (0..4).rev() {
-                x[q.i[l] as usize] = Vec3A::from(ni[l]);
-                x[q.j[l] as usize] = Vec3A::from(nj[l]);
+            let squashed = _mm256_cmp_ps::<_CMP_LT_OQ>(s, _mm256_setzero_ps());
+            let s = _mm256_blendv_ps(s, _mm256_mul_ps(s, compression), squashed);
+            let (si, sj) = (
+                _mm256_mul_ps(load8(&b.ci), s),
+                _mm256_mul_ps(load8(&b.cj), s),
+            );
+            let new_i = points8([0, 1, 2].map(|k| _mm256_add_ps(i[k], _mm256_mul_ps(d[k], si))));
+            let new_j = points8([0, 1, 2].map(|k| _mm256_sub_ps(j[k], _mm256_mul_ps(d[k], sj))));
+            for l in 0..count {
+                let (k, high) = (l % 4, l >= 4);
+                let half = |p: __m256| {
+                    if high {
+                        _mm256_extractf128_ps::<1>(p)
+                    } else {
+                        _mm256_castps256_ps128(p)
+                    }
+                };
+                x[b.i[l] as usize] = Vec3A::from(half(new_i[k]));
+                x[b.j[l] as usize] = Vec3A::from(half(new_j[k]));
+            }
+        }
+    }
+
+    /// [`super::outside_bounds`] on SSE2.
+    #[target_feature(enable = "sse2")]
+    pub(super) fn outside_bounds_sse2(
+        x: &[Vec3A],
+        blocks: &EdgeBlocks,
+        lo2: f32,
+        hi2: f32,
+        out: &mut Vec<u32>,
+    ) {
+        let (lo2, hi2) = (_mm_set1_ps(lo2), _mm_set1_ps(hi2));
+        for (b, start, count) in blocks.iter() {
+            let mut bits = 0;
+            for from in [0, 4] {
+                let ends = |ends: &[u32; LANES]| {
+                    rows(std::array::from_fn(|l| {
+                        __m128::from(x[ends[from + l] as usize])
+                    }))
+                };
+                let (i, j) = (ends(&b.i), ends(&b.j));
+                let d = [0, 1, 2].map(|k| _mm_sub_ps(j[k], i[k]));
+                let r2 = _mm_mul_ps(squared_lengths(d), load4(&b.inv_rest2, from));
+                let outside = _mm_or_ps(_mm_cmpgt_ps(r2, hi2), _mm_cmplt_ps(r2, lo2));
+                bits |= _mm_movemask_ps(outside) << from;
+            }
+            // Only the block's constraints (the idle lanes have zero length).
+            bits &= (1 << count) - 1;
+            while bits != 0 {
+                out.push(start + bits.trailing_zeros());
+                bits &= bits - 1;
             }
         }
     }
@@ -316,7 +449,9 @@ mod sse2 {
 mod tests {
     use super::*;
 
-    /// A deterministic scatter of points and edges (a triangle strip and its diagonals).
+    /// A deterministic scatter of points and edges `k → k + step` for steps 1 to 3: first in runs
+    /// that share no vertex (`k` in one residue class modulo `2·step`: full blocks, and short ones
+    /// where a run ends), then again for the first 20 points in mesh order (blocks of one or two).
     fn strip(n: usize) -> (Vec<Vec3A>, Vec<DistanceConstraint>) {
         let mut state = 0x2545_f491_u32;
         let mut next = || {
@@ -328,24 +463,34 @@ mod tests {
         let x: Vec<Vec3A> = (0..n)
             .map(|k| Vec3A::new(k as f32 + next(), next() * 3.0, next()))
             .collect();
+        let mut edge = |k: usize, step: usize| {
+            let rest = step as f32 * (0.8 + 0.4 * (next() + 0.5));
+            let (wi, wj) = (if k.is_multiple_of(7) { 0.0 } else { 1.0 }, 1.0);
+            DistanceConstraint {
+                i: k as u32,
+                j: (k + step) as u32,
+                inv_rest2: 1.0 / (rest * rest),
+                ci: wi / (wi + wj + 0.01),
+                cj: wj / (wi + wj + 0.01),
+            }
+        };
         let mut constraints = Vec::new();
-        for k in 0..n {
-            for step in [1, 2, 3] {
-                if k + step < n {
-                    let rest = step as f32 * (0.8 + 0.4 * (next() + 0.5));
-                    let (wi, wj) = (if k % 7 == 0 { 0.0 } else { 1.0 }, 1.0);
-                    constraints.push(DistanceConstraint {
-                        i: k as u32,
-                        j: (k + step) as u32,
-                        inv_rest2: 1.0 / (rest * rest),
-                        ci: wi / (wi + wj + 0.01),
-                        cj: wj / (wi + wj + 0.01),
-                    });
+        for step in [1, 2, 3] {
+            for phase in 0..2 * step {
+                for k in (phase..n - step).step_by(2 * step) {
+                    constraints.push(edge(k, step));
                 }
+            }
+        }
+        for k in 0..20 {
+            for step in [1, 2, 3] {
+                constraints.push(edge(k, step));
             }
         }
         (x, constraints)
     }
+
+    type Kernel = fn(&mut [Vec3A], &EdgeBlocks, f32);
 
     /// The plain sweep: one constraint after another.
     fn sweep_one_by_one(x: &mut [Vec3A], constraints: &[DistanceConstraint], compression: f32) {
@@ -387,8 +532,8 @@ mod tests {
     #[test]
     fn the_edges_outside_the_bounds_are_found_in_order() {
         let (mut x, constraints) = strip(61);
-        let quads = EdgeQuads::pack(&constraints);
-        sweep(&mut x, &quads, 0.8);
+        let blocks = EdgeBlocks::pack(&constraints);
+        sweep(&mut x, &blocks, 0.8);
         let (lo2, hi2) = (0.97f32 * 0.97, 1.03f32 * 1.03);
         let expected: Vec<u32> = constraints
             .iter()
@@ -401,15 +546,16 @@ mod tests {
             .collect();
         assert!(!expected.is_empty() && expected.len() < constraints.len());
         let (mut found, mut by_lane) = (Vec::new(), Vec::new());
-        outside_bounds(&x, &quads, lo2, hi2, &mut found);
-        outside_bounds_lanes(&x, &quads, lo2, hi2, &mut by_lane);
+        outside_bounds(&x, &blocks, lo2, hi2, &mut found);
+        outside_bounds_lanes(&x, &blocks, lo2, hi2, &mut by_lane);
         assert_eq!(found, expected);
         assert_eq!(by_lane, expected);
     }
 
     #[test]
-    fn constraints_in_a_quad_share_no_vertex_and_keep_their_order() {
-        // 0–1, 2–3, 1–2 (shares with both), 4–5: the third starts a new quad.
+    fn constraints_in_a_block_share_no_vertex_and_keep_their_order() {
+        // 0–1, 2–3, 1–2 (shares with both), then eight disjoint ones: the third starts a new
+        // block, which takes seven more before it is full.
         let c = |i, j| DistanceConstraint {
             i,
             j,
@@ -417,14 +563,20 @@ mod tests {
             ci: 0.5,
             cj: 0.5,
         };
-        let quads = EdgeQuads::pack(&[c(0, 1), c(2, 3), c(1, 2), c(4, 5)]);
-        assert_eq!(quads.quads.len(), 2);
-        assert_eq!(quads.quads[0].i[..2], [0, 2]);
-        assert_eq!(quads.quads[0].ci, [0.5, 0.5, 0.0, 0.0]);
-        assert_eq!(quads.quads[1].i[..2], [1, 4]);
+        let mut constraints = vec![c(0, 1), c(2, 3), c(1, 2)];
+        constraints.extend((0..8).map(|k| c(10 + 2 * k, 11 + 2 * k)));
+        let blocks = EdgeBlocks::pack(&constraints);
+        assert_eq!(blocks.starts, [0, 2, 10, 11]);
+        assert_eq!(blocks.blocks[0].i[..2], [0, 2]);
+        assert_eq!(
+            blocks.blocks[0].ci,
+            [0.5, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        );
+        assert_eq!(blocks.blocks[1].i, [1, 10, 12, 14, 16, 18, 20, 22]);
+        assert_eq!(blocks.blocks[2].i[0], 24);
         // The idle lanes repeat lane 0's first vertex at both ends.
-        assert_eq!(quads.quads[1].i[2..], [1, 1]);
-        assert_eq!(quads.quads[1].j[2..], [1, 1]);
+        assert_eq!(blocks.blocks[2].i[1..], [24; 7]);
+        assert_eq!(blocks.blocks[2].j[1..], [24; 7]);
     }
 
     #[test]
@@ -438,7 +590,7 @@ mod tests {
             ci: 0.5,
             cj: 0.5,
         };
-        sweep(&mut x, &EdgeQuads::pack(&[c]), 1.0);
+        sweep(&mut x, &EdgeBlocks::pack(&[c]), 1.0);
         let moved = 2.0 * 0.5 * (6.0 / 13.0);
         assert!((x[0].x - moved).abs() < 1e-6, "{:?}", x[0]);
         assert!((x[1].x - (2.0 - moved)).abs() < 1e-6, "{:?}", x[1]);
@@ -446,21 +598,45 @@ mod tests {
     }
 
     #[test]
-    fn the_quad_sweep_gives_the_same_positions_as_one_constraint_after_another() {
+    fn the_block_sweeps_give_the_same_positions_as_one_constraint_after_another() {
         for compression in [1.0, 0.8, 0.0] {
             let (start, constraints) = strip(97);
-            let quads = EdgeQuads::pack(&constraints);
-            assert!(quads.quads.len() < constraints.len(), "nothing was packed");
-            let (mut plain, mut lanes, mut packed) = (start.clone(), start.clone(), start);
+            let blocks = EdgeBlocks::pack(&constraints);
+            let full = blocks
+                .starts
+                .windows(2)
+                .filter(|s| s[1] - s[0] == 8)
+                .count();
+            let short = blocks.starts.windows(2).filter(|s| s[1] - s[0] < 4).count();
+            assert!(
+                full > 20 && short > 20,
+                "{full} full blocks, {short} short ones"
+            );
+            let mut plain = start.clone();
+            // Each kernel this machine can run, and the dispatching `sweep`.
+            let mut kernels: Vec<(&str, Kernel)> = vec![("lanes", sweep_lanes), ("sweep", sweep)];
+            #[cfg(target_arch = "x86_64")]
+            {
+                // SAFETY: SSE2 is part of the x86-64 baseline.
+                kernels.push(("sse2", |x, b, c| unsafe { x86::sweep_sse2(x, b, c) }));
+                if std::arch::is_x86_feature_detected!("avx") {
+                    // SAFETY: the processor has AVX (checked just above).
+                    kernels.push(("avx", |x, b, c| unsafe { x86::sweep_avx(x, b, c) }));
+                }
+            }
+            let mut results = vec![start; kernels.len()];
             for _ in 0..5 {
                 sweep_one_by_one(&mut plain, &constraints, compression);
-                sweep_lanes(&mut lanes, &quads.quads, compression);
-                sweep(&mut packed, &quads, compression);
+                for ((_, kernel), x) in kernels.iter().zip(&mut results) {
+                    kernel(x, &blocks, compression);
+                }
             }
-            for k in 0..plain.len() {
-                // Bit for bit: the same arithmetic on each edge, in an order that cannot matter.
-                assert_eq!(plain[k].to_array(), lanes[k].to_array(), "vertex {k}");
-                assert_eq!(plain[k].to_array(), packed[k].to_array(), "vertex {k}");
+            for ((name, _), x) in kernels.iter().zip(&results) {
+                for k in 0..plain.len() {
+                    // Bit for bit: the same arithmetic on each edge, in an order that cannot
+                    // matter.
+                    assert_eq!(plain[k].to_array(), x[k].to_array(), "{name}, vertex {k}");
+                }
             }
         }
     }
