@@ -57,13 +57,13 @@
 //!      one): with that, the SIMD box test in the collisions and the strain limit's SIMD scan,
 //!      the eight cases of `cargo bench --bench cloth` ran at 1.43× the frame rate (summed;
 //!      alternated runs of both builds on 2026-12-02, two each; 1.31× with blocks of four).
-//!      Compressed
-//!      edges get `compression` (0.8) of their correction: cloth buckles rather than compresses, a
-//!      2 cm mesh cannot show the buckles, and full-strength compression projections were seen to
+//!      Compressed edges get `compression` (0.8) of their correction: cloth buckles rather than
+//!      compresses, a 2 cm mesh cannot show the buckles, and full-strength compression projections were seen to
 //!      pump energy into crumpled regions (and on the kick they raised the worst frame's
 //!      95th-percentile strain, e.g. dress 2,000 vertices 2.29 → 2.70 %). Each projection computes
-//!      its correction `(l − l₀)/l` from `l²/l₀²` without a square root ([`stretch_correction`](super::stretch::stretch_correction), a
-//!      Padé approximant exact at rest and to second order; a sweep takes about an eighth less
+//!      its correction `(l − l₀)/l` from `l²/l₀²` without a square root
+//!      ([`stretch_correction`](super::stretch::stretch_correction), a Padé approximant exact at
+//!      rest and to second order; a sweep takes about an eighth less
 //!      time). The sweeps are accelerated with the Chebyshev semi-iterative method (Wang 2015, "A
 //!      Chebyshev semi-iterative approach for accelerating projective and position-based dynamics"):
 //!      after each sweep from the second on, the iterate is pushed on from the one two sweeps back
