@@ -3,8 +3,10 @@
 //!
 //! `cargo run --release --example marker_misses -- MASKS_DIR_NAME DATASET [DATASET ...]`
 //! (MASKS_DIR_NAME: `masks` for ground truth, `segmasks` for the segmenter's). Prints per dataset
-//! the recall and precision (as `suitcap describe --truth-markers` scores them), the verdicts of the
-//! nearest same-colour component of each missed marker, and a few traits of the false detections.
+//! the recall and precision (as `suitcap describe --truth-markers` scores them), why each missed
+//! marker was missed (its detection taken by another truth marker of its colour, on the same body
+//! part or another, or else the verdict of the nearest same-colour component), and a few traits of
+//! the false detections.
 //! `VERBOSE=1` lists every miss and false detection; `DUMP=FILE` appends one CSV row per detection
 //! (dataset, masks, frame, colour, area, border inside / cloth / outside, peak saturation, border
 //! running on past the mask, correct, tolerance, x, y) for looking at the tests' statistics.
@@ -12,7 +14,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use suitcap::descriptor::markers::{
-    match_markers, match_tolerance, Component, DetectedMarker, MarkerDetector, TruthMarker, Verdict,
+    match_markers, match_tolerance, pair_markers, Component, DetectedMarker, MarkerDetector,
+    TruthMarker, Verdict,
 };
 use suitcap::mask::Mask;
 use suitcap::suit::SuitDefinition;
@@ -47,10 +50,18 @@ fn main() -> anyhow::Result<()> {
                 .collect();
             let detected: Vec<DetectedMarker> = dets.iter().map(|c| c.marker).collect();
             let (tm, dm) = match_markers(&detected, &expected, tol);
+            let paired = pair_markers(&detected, &expected, tol);
+            // The body part of each truth marker (`of_frame`'s order): ids are part · 10000 + …
+            let parts: Vec<u32> = truth
+                .iter()
+                .filter(|r| r.frame == index && suit.markers.iter().any(|c| c.name == r.colour))
+                .map(|r| r.marker_id / 10_000)
+                .collect();
+            let counts = |m: &TruthMarker| m.visible_fraction >= 0.6 && m.visible_px >= 6;
             detections += dets.len();
             correct += dm.iter().filter(|&&m| m).count();
             for (t, e) in expected.iter().enumerate() {
-                if e.visible_fraction < 0.6 || e.visible_px < 6 {
+                if !counts(e) {
                     continue;
                 }
                 counted += 1;
@@ -67,7 +78,23 @@ fn main() -> anyhow::Result<()> {
                             .distance(e.centre)
                             .total_cmp(&b.marker.centre.distance(e.centre))
                     });
+                // A detection within tolerance that another truth marker of its colour took.
+                let taken_by = paired.iter().enumerate().find_map(|(other, d)| {
+                    d.filter(|&d| detected[d].centre.distance(e.centre) <= tol)
+                        .map(|_| other)
+                });
                 let reason = match near {
+                    _ if taken_by.is_some() => {
+                        let other = taken_by.unwrap_or(t);
+                        let whose = if !counts(&expected[other]) {
+                            "a partly visible marker"
+                        } else if parts.get(other) == parts.get(t) {
+                            "a counted marker of its part"
+                        } else {
+                            "a counted marker of another part"
+                        };
+                        format!("detection taken by {whose}")
+                    }
                     None => "no component".to_string(),
                     Some(c) if c.marker.centre.distance(e.centre) > 2.0 * tol => {
                         "no component within 2 tol".to_string()

@@ -556,13 +556,12 @@ pub fn match_tolerance(truth: &[TruthMarker]) -> f32 {
 }
 
 /// Greedy matching of detections to truth markers of the same colour within `tolerance` pixels,
-/// nearest pairs first, each used at most once: whether each truth marker and each detection was
-/// matched.
-pub fn match_markers(
+/// nearest pairs first, each used at most once: the detection each truth marker was matched to.
+pub fn pair_markers(
     detected: &[DetectedMarker],
     truth: &[TruthMarker],
     tolerance: f32,
-) -> (Vec<bool>, Vec<bool>) {
+) -> Vec<Option<usize>> {
     let mut pairs: Vec<(f32, usize, usize)> = Vec::new();
     for (t, tm) in truth.iter().enumerate() {
         for (d, dm) in detected.iter().enumerate() {
@@ -573,15 +572,32 @@ pub fn match_markers(
         }
     }
     pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut truth_matched = vec![false; truth.len()];
-    let mut detection_matched = vec![false; detected.len()];
+    let mut detection_of = vec![None; truth.len()];
+    let mut detection_used = vec![false; detected.len()];
     for (_, t, d) in pairs {
-        if !truth_matched[t] && !detection_matched[d] {
-            truth_matched[t] = true;
-            detection_matched[d] = true;
+        if detection_of[t].is_none() && !detection_used[d] {
+            detection_of[t] = Some(d);
+            detection_used[d] = true;
         }
     }
-    (truth_matched, detection_matched)
+    detection_of
+}
+
+/// [`pair_markers`] as whether each truth marker and each detection was matched.
+pub fn match_markers(
+    detected: &[DetectedMarker],
+    truth: &[TruthMarker],
+    tolerance: f32,
+) -> (Vec<bool>, Vec<bool>) {
+    let detection_of = pair_markers(detected, truth, tolerance);
+    let mut detection_matched = vec![false; detected.len()];
+    for &d in detection_of.iter().flatten() {
+        detection_matched[d] = true;
+    }
+    (
+        detection_of.iter().map(Option::is_some).collect(),
+        detection_matched,
+    )
 }
 
 /// Detections scored against the truth of one or more frames.
