@@ -37,9 +37,12 @@
 //! → 0.939 / 0.961, 0.968 / 0.962 → 0.967 / 0.980, 0.930 / 0.914 → 0.927 / 0.966, 0.953 / 0.999 →
 //! 0.951 / 0.9996. The previous session's grey-rim, saturation and 40 % border rules had raised
 //! kick 11's recall 0.894 → 0.963 (the old rule lost purple markers whose whole rim is grey). The
-//! constants were chosen on these same sequences. What is still missed with ground-truth masks is
-//! mostly markers seen edge-on whose thin strip blends with the cloth into grey or brown that fails
-//! the gates, leaving a component of a pixel or two; with the segmenter's masks the false markers
+//! constants were chosen on these same sequences. Of what is still missed with ground-truth masks,
+//! about half are markers whose detection another truth marker of their colour took, mostly one
+//! of another body part where the generator's part meshes overlap at a joint (two squares a few
+//! pixels apart, one component; `examples/marker_misses.rs` counts them), and most of the rest
+//! markers seen edge-on whose thin strip blends with the cloth into grey or brown that fails the
+//! gates, leaving a component of a pixel or two; with the segmenter's masks the false markers
 //! are background inside the leaked mask, about half of them on its edge. Tried and dropped:
 //! splitting large components into their saturated cores (recall +0.1–0.3 points, precision −1
 //! point), taking the cloth's colour out of grey and brownish pixels before the hue test (precision
