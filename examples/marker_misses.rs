@@ -80,12 +80,14 @@ fn main() -> anyhow::Result<()> {
                     });
                 // A detection within tolerance that another truth marker of its colour took.
                 let taken_by = paired.iter().enumerate().find_map(|(other, d)| {
-                    d.filter(|&d| detected[d].centre.distance(e.centre) <= tol)
-                        .map(|_| other)
+                    d.filter(|&d| {
+                        detected[d].colour == e.colour
+                            && detected[d].centre.distance(e.centre) <= tol
+                    })
+                    .map(|_| other)
                 });
-                let reason = match near {
-                    _ if taken_by.is_some() => {
-                        let other = taken_by.unwrap_or(t);
+                let reason = match (taken_by, near) {
+                    (Some(other), _) => {
                         let whose = if !counts(&expected[other]) {
                             "a partly visible marker"
                         } else if parts.get(other) == parts.get(t) {
@@ -95,11 +97,11 @@ fn main() -> anyhow::Result<()> {
                         };
                         format!("detection taken by {whose}")
                     }
-                    None => "no component".to_string(),
-                    Some(c) if c.marker.centre.distance(e.centre) > 2.0 * tol => {
+                    (None, None) => "no component".to_string(),
+                    (None, Some(c)) if c.marker.centre.distance(e.centre) > 2.0 * tol => {
                         "no component within 2 tol".to_string()
                     }
-                    Some(c) => {
+                    (None, Some(c)) => {
                         let far = c.marker.centre.distance(e.centre) > tol;
                         format!("{:?}{}", c.verdict, if far { " (off centre)" } else { "" })
                     }

@@ -38,7 +38,7 @@
 //! 0.951 / 0.9996. The previous session's grey-rim, saturation and 40 % border rules had raised
 //! kick 11's recall 0.894 → 0.963 (the old rule lost purple markers whose whole rim is grey). The
 //! constants were chosen on these same sequences. Of what is still missed with ground-truth masks,
-//! about half are markers whose detection another truth marker of their colour took, mostly one
+//! two fifths are markers whose detection another truth marker of their colour took, mostly one
 //! of another body part where the generator's part meshes overlap at a joint (two squares a few
 //! pixels apart, one component; `examples/marker_misses.rs` counts them), and most of the rest
 //! markers seen edge-on whose thin strip blends with the cloth into grey or brown that fails the
