@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use suitcap::descriptor::markers::{
-    match_markers, match_tolerance, pair_markers, Component, DetectedMarker, MarkerDetector,
+    match_tolerance, matched_detections, pair_markers, Component, DetectedMarker, MarkerDetector,
     TruthMarker, Verdict,
 };
 use suitcap::mask::Mask;
@@ -49,14 +49,8 @@ fn main() -> anyhow::Result<()> {
                 .filter(|c| c.verdict == Verdict::Marker)
                 .collect();
             let detected: Vec<DetectedMarker> = dets.iter().map(|c| c.marker).collect();
-            let (tm, dm) = match_markers(&detected, &expected, tol);
             let paired = pair_markers(&detected, &expected, tol);
-            // The body part of each truth marker (`of_frame`'s order): ids are part · 10000 + …
-            let parts: Vec<u32> = truth
-                .iter()
-                .filter(|r| r.frame == index && suit.markers.iter().any(|c| c.name == r.colour))
-                .map(|r| r.marker_id / 10_000)
-                .collect();
+            let dm = matched_detections(&paired, detected.len());
             let counts = |m: &TruthMarker| m.visible_fraction >= 0.6 && m.visible_px >= 6;
             detections += dets.len();
             correct += dm.iter().filter(|&&m| m).count();
@@ -65,7 +59,7 @@ fn main() -> anyhow::Result<()> {
                     continue;
                 }
                 counted += 1;
-                if tm[t] {
+                if paired[t].is_some() {
                     found += 1;
                     continue;
                 }
@@ -90,7 +84,7 @@ fn main() -> anyhow::Result<()> {
                     (Some(other), _) => {
                         let whose = if !counts(&expected[other]) {
                             "a partly visible marker"
-                        } else if parts.get(other) == parts.get(t) {
+                        } else if expected[other].marker_id / 10_000 == e.marker_id / 10_000 {
                             "a counted marker of its part"
                         } else {
                             "a counted marker of another part"

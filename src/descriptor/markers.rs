@@ -520,6 +520,8 @@ pub struct Component {
 /// A marker the generator says is visible, for scoring detections.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TruthMarker {
+    /// The generator's marker id: `body part · 10000 + row · 100 + column`.
+    pub marker_id: u32,
     pub centre: Vec2,
     pub colour: usize,
     pub visible_fraction: f32,
@@ -540,6 +542,7 @@ impl TruthMarker {
             .filter_map(|r| {
                 let colour = suit.markers.iter().position(|c| c.name == r.colour)?;
                 Some(TruthMarker {
+                    marker_id: r.marker_id,
                     centre: Vec2::new(r.x, r.y),
                     colour,
                     visible_fraction: r.visible_fraction,
@@ -586,6 +589,15 @@ pub fn pair_markers(
     detection_of
 }
 
+/// Whether each of `detections` detections was matched, from [`pair_markers`]' result.
+pub fn matched_detections(detection_of: &[Option<usize>], detections: usize) -> Vec<bool> {
+    let mut matched = vec![false; detections];
+    for &d in detection_of.iter().flatten() {
+        matched[d] = true;
+    }
+    matched
+}
+
 /// [`pair_markers`] as whether each truth marker and each detection was matched.
 pub fn match_markers(
     detected: &[DetectedMarker],
@@ -593,13 +605,9 @@ pub fn match_markers(
     tolerance: f32,
 ) -> (Vec<bool>, Vec<bool>) {
     let detection_of = pair_markers(detected, truth, tolerance);
-    let mut detection_matched = vec![false; detected.len()];
-    for &d in detection_of.iter().flatten() {
-        detection_matched[d] = true;
-    }
     (
         detection_of.iter().map(Option::is_some).collect(),
-        detection_matched,
+        matched_detections(&detection_of, detected.len()),
     )
 }
 
@@ -738,6 +746,7 @@ mod tests {
             area: 9,
         };
         let t = |x: f32, c: usize, f: f32| TruthMarker {
+            marker_id: 0,
             centre: Vec2::new(x, 0.0),
             colour: c,
             visible_fraction: f,
