@@ -7,7 +7,8 @@
 //! marker was missed (its detection taken by another truth marker of its colour, on the same body
 //! part or another, or else the verdict of the nearest same-colour component), and a few traits of
 //! the false detections.
-//! `VERBOSE=1` lists every miss and false detection; `DUMP=FILE` appends one CSV row per detection
+//! `VERBOSE=1` lists every miss (with its marker id and the id of the truth marker that took its
+//! detection, if one did) and every false detection; `DUMP=FILE` appends one CSV row per detection
 //! (dataset, masks, frame, colour, area, border inside / cloth / outside, peak saturation, border
 //! running on past the mask, correct, tolerance, x, y) for looking at the tests' statistics.
 use std::collections::BTreeMap;
@@ -102,9 +103,10 @@ fn main() -> anyhow::Result<()> {
                 };
                 if verbose {
                     let nearest = near.map(|c| (c.marker, c.border, c.peak_saturation));
+                    let by = taken_by.map(|other| expected[other].marker_id);
                     println!(
-                        "miss f{index} {:?} c{} vis {:.2}/{} tol {tol:.1}: {reason} {nearest:?}",
-                        e.centre, e.colour, e.visible_fraction, e.visible_px
+                        "miss f{index} m{} {:?} c{} vis {:.2}/{} tol {tol:.1}: {reason} (by {by:?}) {nearest:?}",
+                        e.marker_id, e.centre, e.colour, e.visible_fraction, e.visible_px
                     );
                 }
                 *miss_reasons.entry(reason).or_default() += 1;

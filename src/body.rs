@@ -177,6 +177,11 @@ pub struct BodyPart {
     pub width_axis: Vec3,
     /// Length of each end cap along the bone, as a fraction of the smaller semi-axis.
     pub cap: f32,
+    /// Whether the start and the end cap carry markers. Not where the part meets another suit part
+    /// at a joint: a printed suit's cloth runs on across the joint with one grid, while two capsules
+    /// overlap there, and both grids would print squares a few millimetres apart (two same-coloured
+    /// squares that blur into one blob on camera).
+    pub patterned_caps: [bool; 2],
     pub material: Material,
     /// Pattern surface id (the part's index), part of every marker id on it.
     pub surface: u32,
@@ -471,19 +476,25 @@ impl BodyPart {
         }
     }
 
-    /// The marker grid of this part for `suit`: rows along the whole part, caps included, each with
-    /// as many columns as its perimeter holds (none close to a pole). Empty for parts that are not
-    /// suit cloth.
+    /// The marker grid of this part for `suit`: rows along the straight section and the caps that
+    /// carry markers ([`BodyPart::patterned_caps`]), each with as many columns as its perimeter holds
+    /// (none close to a pole). Empty for parts that are not suit cloth.
     pub fn marker_grid(&self, suit: &SuitDefinition) -> MarkerGrid {
         let pitch = suit.pitch_cm();
         let (cap_start, cap_end) = self.cap_lengths();
-        let total = cap_start + self.length() + cap_end;
+        let low = if self.patterned_caps[0] {
+            -cap_start
+        } else {
+            0.0
+        };
+        let high = self.length() + if self.patterned_caps[1] { cap_end } else { 0.0 };
+        let total = high - low;
         let rows = if self.material == Material::Suit {
             (total / pitch).floor() as u32
         } else {
             0
         };
-        let first_row_u = -cap_start + (total - rows as f32 * pitch) * 0.5;
+        let first_row_u = low + (total - rows as f32 * pitch) * 0.5;
         let rows = (0..rows)
             .map(|row| {
                 let circumference = self.circumference_at(first_row_u + (row as f32 + 0.5) * pitch);
@@ -590,6 +601,7 @@ impl Body {
                        re: Vec2,
                        width_axis: Vec3,
                        cap: f32,
+                       patterned_caps: [bool; 2],
                        material| {
             let surface = parts.len() as u32;
             parts.push(BodyPart {
@@ -601,6 +613,7 @@ impl Body {
                 radii_end: re,
                 width_axis,
                 cap,
+                patterned_caps,
                 material,
                 surface,
             });
@@ -619,6 +632,7 @@ impl Body {
             r(13.8, 9.6),
             Vec3::X,
             0.7,
+            [true, false],
             Suit,
         )?;
         add(
@@ -630,6 +644,7 @@ impl Body {
             r(14.8, 10.0),
             Vec3::X,
             0.5,
+            [false, false],
             Suit,
         )?;
         add(
@@ -641,6 +656,7 @@ impl Body {
             r(16.5, 9.5),
             Vec3::X,
             0.55,
+            [false, true],
             Suit,
         )?;
         add(
@@ -652,6 +668,7 @@ impl Body {
             r(5.0, 5.0),
             Vec3::X,
             1.0,
+            [true, true],
             Skin,
         )?;
         add(
@@ -663,6 +680,7 @@ impl Body {
             r(7.6, 9.0),
             Vec3::X,
             1.0,
+            [true, true],
             Skin,
         )?;
         for side in ["r", "l"] {
@@ -681,6 +699,7 @@ impl Body {
                 r(4.3, 4.3),
                 Vec3::Z,
                 1.0,
+                [false, false],
                 Suit,
             )?;
             add(
@@ -696,6 +715,7 @@ impl Body {
                 r(3.0, 3.0),
                 Vec3::Z,
                 1.0,
+                [false, true],
                 Suit,
             )?;
             let hand_dir = hand.normalize_or(Vec3::X);
@@ -712,6 +732,7 @@ impl Body {
                 r(3.8, 1.5),
                 Vec3::Z,
                 1.0,
+                [true, true],
                 Skin,
             )?;
             add(
@@ -727,6 +748,7 @@ impl Body {
                 r(5.6, 5.4),
                 Vec3::X,
                 1.0,
+                [false, false],
                 Suit,
             )?;
             add(
@@ -742,6 +764,7 @@ impl Body {
                 r(3.9, 3.9),
                 Vec3::X,
                 1.0,
+                [false, true],
                 Suit,
             )?;
             let toe = skeleton
@@ -761,6 +784,7 @@ impl Body {
                 r(4.0, 2.6),
                 Vec3::X,
                 1.0,
+                [true, true],
                 Shoe,
             )?;
         }
@@ -788,6 +812,7 @@ mod tests {
             radii_end: Vec2::splat(10.0),
             width_axis: Vec3::X,
             cap: 1.0,
+            patterned_caps: [true, true],
             material: Material::Suit,
             surface: 2,
         }
@@ -824,6 +849,34 @@ mod tests {
         assert_eq!(part.marker_at(&s, m.centre_u, m.centre_s), Some(m));
         assert_eq!(part.marker_at(&s, m.centre_u + 3.0, m.centre_s), None);
         assert_eq!(part.marker_at(&s, m.centre_u + 1.9, m.centre_s), Some(m));
+    }
+
+    #[test]
+    fn caps_at_a_joint_carry_no_markers() {
+        let s = suit();
+        // 30 cm straight, no patterned cap: 4 rows of 7 cm, 1 cm spare at each end.
+        let part = BodyPart {
+            patterned_caps: [false, false],
+            ..cylinder()
+        };
+        let rows: Vec<f32> = part.markers(&s).iter().map(|m| m.centre_u).collect();
+        let mut centres = rows.clone();
+        centres.dedup();
+        assert_eq!(centres, [4.5, 11.5, 18.5, 25.5]);
+        assert!(rows.iter().all(|u| u - 2.0 >= 0.0 && u + 2.0 <= 30.0));
+        for s_frac in [0.0, 0.3, 0.7] {
+            for u in [-9.0, -5.0, -1.0, 31.0, 35.0, 39.0] {
+                assert_eq!(part.marker_at(&s, u, s_frac), None, "u {u}");
+            }
+        }
+        // Only the start cap patterned: 40 cm → 5 rows from 2.5 cm into the cap.
+        let part = BodyPart {
+            patterned_caps: [true, false],
+            ..cylinder()
+        };
+        let mut centres: Vec<f32> = part.markers(&s).iter().map(|m| m.centre_u).collect();
+        centres.dedup();
+        assert_eq!(centres, [-4.0, 3.0, 10.0, 17.0, 24.0]);
     }
 
     #[test]

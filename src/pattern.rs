@@ -1080,6 +1080,7 @@ mod tests {
             radii_end: Vec2::splat(10.0),
             width_axis: Vec3::X,
             cap: 1.0,
+            patterned_caps: [true, true],
             material: Material::Suit,
             surface: 2,
         }

@@ -321,6 +321,7 @@ mod tests {
             radii_end,
             width_axis: Vec3::X,
             cap,
+            patterned_caps: [true, true],
             material: Material::Suit,
             surface: 0,
         }

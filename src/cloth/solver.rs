@@ -2019,6 +2019,7 @@ mod tests {
             radii_end: Vec2::splat(radius),
             width_axis: Vec3::Y.any_orthonormal_vector(),
             cap: 1.0,
+            patterned_caps: [true, true],
             material: Tissue::Skin,
             surface: 0,
         }

@@ -114,7 +114,11 @@ pub const ROOT_BEHIND_SURFACE_CM: f32 = 10.0;
 /// sequences (punch 02_05, dance 05_02, run 09_04, sit 13_01, traffic 13_26, drink 14_37) was
 /// 0.960 (0.935–0.989). Ground-truth marker centres with at least 60 % of their area visible give
 /// 0.98–1.01: the detector adds foreshortened and partly hidden markers whose centres sit closer.
-pub const DETECTED_PITCH_SHORTFALL: f32 = 0.96;
+/// Since the generator stopped printing markers on the caps where two suit parts meet (no more
+/// doubled squares at the joints, 2026-12-03), 0.96 put the root too near on the same six
+/// sequences (median estimated / true depth 0.988, `suitcap-train eval` prints it); 0.97 gives 0.998
+/// (0.972–1.019 per sequence).
+pub const DETECTED_PITCH_SHORTFALL: f32 = 0.97;
 
 /// Depth (cm) of the suit's surface from the marker grid: the 95th percentile of each marker's
 /// distance to its nearest neighbour, divided by [`DETECTED_PITCH_SHORTFALL`], is taken as the
@@ -269,12 +273,12 @@ mod tests {
     #[test]
     fn a_grid_of_markers_gives_its_depth() {
         // A 6 × 4 grid 14 px apart, pitch 7 cm, focal 600 px: depth = 600 · 7 / 14 = 300 cm, times
-        // the detector's shortfall (0.96): 288 cm.
+        // the detector's shortfall (0.97): 291 cm.
         let centres: Vec<Vec2> = (0..24)
             .map(|i| Vec2::new((i % 6) as f32 * 14.0, (i / 6) as f32 * 14.0))
             .collect();
         let depth = depth_from_markers(&centres, 7.0, 600.0).expect("enough markers");
-        assert!((depth - 288.0).abs() < 1e-3, "{depth}");
+        assert!((depth - 291.0).abs() < 1e-3, "{depth}");
         assert!(depth_from_markers(&centres[..5], 7.0, 600.0).is_none());
     }
 

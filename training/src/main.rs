@@ -701,6 +701,9 @@ fn evaluate(
     let mut root = (0.0f64, 0.0f64, 0usize, 0usize);
     // Root reprojection error (pixels) before and after: what decides where a garment is drawn.
     let mut root_pixels = (0.0f64, 0.0f64, 0usize);
+    // Estimated over true root depth along the optical axis, after the correction: per dataset and all.
+    let mut depth_ratios_all = Vec::new();
+    let mut depth_ratio_medians = Vec::new();
     for dir in data {
         let dataset = Dataset::open(dir)?;
         let layout =
@@ -708,6 +711,7 @@ fn evaluate(
         pipeline.reset();
         let mut errors = JointErrors::new(names.clone());
         let mut missed = 0;
+        let mut depth_ratios = Vec::new();
         let skeleton = pipeline.regressor.skeleton.skeleton.clone();
         let mut filters: Vec<PoseFilter> = variants
             .iter()
@@ -757,6 +761,7 @@ fn evaluate(
                 root_pixels.0 += b.pixel.distance(t.pixel) as f64;
                 root_pixels.1 += a.pixel.distance(t.pixel) as f64;
                 root_pixels.2 += 1;
+                depth_ratios.push(a.depth / t.depth);
             }
             root.2 += 1;
             root.3 += result.correction.is_some() as usize;
@@ -773,6 +778,8 @@ fn evaluate(
                 errors.mean_geodesic()
             );
         }
+        depth_ratios_all.extend_from_slice(&depth_ratios);
+        depth_ratio_medians.push(median(&mut depth_ratios));
         all.merge(&errors);
         per_dataset.push((
             dir.display().to_string(),
@@ -811,8 +818,24 @@ fn evaluate(
             root.3,
             root.2
         );
+        let per: Vec<String> = depth_ratio_medians
+            .iter()
+            .map(|r| r.map_or("-".to_owned(), |r| format!("{r:.3}")))
+            .collect();
+        if let Some(all) = median(&mut depth_ratios_all) {
+            println!(
+                "root depth, estimated over true (after the correction): median {all:.3}; per dataset {}",
+                per.join(", ")
+            );
+        }
     }
     Ok((all, per_dataset))
+}
+
+/// The median of `values` (the upper one of an even count), `None` when empty.
+fn median(values: &mut [f32]) -> Option<f32> {
+    values.sort_by(f32::total_cmp);
+    values.get(values.len() / 2).copied()
 }
 
 fn eval(
