@@ -20,7 +20,7 @@
 //!    head, hands and shoes: pixels of a band around the suit ([`SegmenterOptions::part_reach`])
 //!    connected to it whose colour is likelier under the learned part table than under the (online)
 //!    background, in pieces shaped like a head, a hand or a shoe ([`SegmenterOptions::part_max_share`],
-//!    [`SegmenterOptions::part_min_depth`]);
+//!    [`SegmenterOptions::part_max_round_share`], [`SegmenterOptions::part_min_depth`]);
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut.
 //!
@@ -67,8 +67,11 @@ pub struct SegmenterOptions {
     /// [`keep_person_region`](super::cleanup::keep_person_region); 0: the main region only).
     pub piece_reach: f32,
     /// The largest piece attached as a part (head, hand, shoe), as a share of the suit's area: a
-    /// head is about 6 % of it.
+    /// head is about 6 % of it seen from the front.
     pub part_max_share: f32,
+    /// The same for a round piece (see [`PartLimits::max_round_area`]): a head seen from the side
+    /// or over a crouch, up to an eighth of the suit's area.
+    pub part_max_round_share: f32,
     /// The least area of an attached part per pixel of its contact with the suit, as a share of
     /// the suit's height: a hand is about 0.06 of it deep, a strip of background along an arm a
     /// pixel or two.
@@ -88,6 +91,7 @@ impl Default for SegmenterOptions {
             part_reach: PART_REACH,
             piece_reach: PART_REACH,
             part_max_share: 0.1,
+            part_max_round_share: 0.2,
             part_min_depth: 0.03,
         }
     }
@@ -542,6 +546,7 @@ impl Segmenter {
             self.tables.part_prior,
             &self.background_bin,
         );
+        let suit_area = labels.iter().filter(|&&l| l).count() as f32;
         let added = attach_parts(
             &mut person,
             &self.band,
@@ -552,9 +557,8 @@ impl Segmenter {
                 sigma * part_nll[bin] + prior[1] < sigma * bg[bin] + prior[0]
             },
             PartLimits {
-                max_area: (self.options.part_max_share
-                    * labels.iter().filter(|&&l| l).count() as f32)
-                    as usize,
+                max_area: (self.options.part_max_share * suit_area) as usize,
+                max_round_area: (self.options.part_max_round_share * suit_area) as usize,
                 min_depth: self.options.part_min_depth * region_height(&labels, w) as f32,
             },
             &mut self.part,
