@@ -364,7 +364,7 @@ pub struct PartLimits {
     pub max_area: usize,
     /// The largest round part: one that fills at least [`ROUND_FILL`] of its bounding box, as a
     /// head does (an ellipse fills π/4 of its box). Seen from the side or over a crouch the suit
-    /// shows less of its area and a head is up to an eighth of it, while background of a skin
+    /// shows less of its area and a head's piece grows to 12 % of it, while background of a skin
     /// colour that the flood runs into is ragged.
     pub max_round_area: usize,
     /// The least area per pixel of contact with the suit: a head, a hand or a shoe joins the suit

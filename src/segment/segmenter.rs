@@ -70,7 +70,7 @@ pub struct SegmenterOptions {
     /// head is about 6 % of it seen from the front.
     pub part_max_share: f32,
     /// The same for a round piece (see [`PartLimits::max_round_area`]): a head seen from the side
-    /// or over a crouch, up to an eighth of the suit's area.
+    /// or over a crouch was 12 % of the suit's area on the demo clip.
     pub part_max_round_share: f32,
     /// The least area of an attached part per pixel of its contact with the suit, as a share of
     /// the suit's height: a hand is about 0.06 of it deep, a strip of background along an arm a
