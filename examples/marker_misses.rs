@@ -16,7 +16,7 @@ use std::path::Path;
 
 use suitcap::descriptor::markers::{
     match_tolerance, matched_detections, pair_markers, Component, DetectedMarker, MarkerDetector,
-    TruthMarker, Verdict,
+    TruthMarker, Verdict, COUNTED_VISIBLE_FRACTION, COUNTED_VISIBLE_PX,
 };
 use suitcap::mask::Mask;
 use suitcap::suit::SuitDefinition;
@@ -52,7 +52,7 @@ fn main() -> anyhow::Result<()> {
             let detected: Vec<DetectedMarker> = dets.iter().map(|c| c.marker).collect();
             let paired = pair_markers(&detected, &expected, tol);
             let dm = matched_detections(&paired, detected.len());
-            let counts = |m: &TruthMarker| m.visible_fraction >= 0.6 && m.visible_px >= 6;
+            let counts = |m: &TruthMarker| m.counts(COUNTED_VISIBLE_FRACTION, COUNTED_VISIBLE_PX);
             detections += dets.len();
             correct += dm.iter().filter(|&&m| m).count();
             for (t, e) in expected.iter().enumerate() {

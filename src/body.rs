@@ -180,7 +180,9 @@ pub struct BodyPart {
     /// Whether the start and the end cap carry markers. Not where the part meets another suit part
     /// at a joint: a printed suit's cloth runs on across the joint with one grid, while two capsules
     /// overlap there, and both grids would print squares a few millimetres apart (two same-coloured
-    /// squares that blur into one blob on camera).
+    /// squares that blur into one blob on camera). This covers parts that meet end to end (elbows,
+    /// knees, the waist); where a limb rises out of the side of the trunk (shoulders, hips) the
+    /// limb's first rows and the trunk's grid still overlap.
     pub patterned_caps: [bool; 2],
     pub material: Material,
     /// Pattern surface id (the part's index), part of every marker id on it.

@@ -517,7 +517,10 @@ fn describe(
     descriptor: &str,
     truth_markers: Option<&PathBuf>,
 ) -> anyhow::Result<()> {
-    use suitcap::descriptor::markers::{match_tolerance, score_markers, MarkerScore, TruthMarker};
+    use suitcap::descriptor::markers::{
+        match_tolerance, score_markers, MarkerScore, TruthMarker, COUNTED_VISIBLE_FRACTION,
+        COUNTED_VISIBLE_PX,
+    };
     use suitcap::descriptor::{Codebooks, Describer, DescriptorKind};
     let kind = DescriptorKind::parse(descriptor).with_context(|| {
         format!("--descriptor '{descriptor}': expected fc, hog, fc+hog, full or silhouette")
@@ -595,8 +598,8 @@ fn describe(
             score.add(score_markers(
                 &markers,
                 &expected,
-                0.6,
-                6,
+                COUNTED_VISIBLE_FRACTION,
+                COUNTED_VISIBLE_PX,
                 match_tolerance(&expected),
             ));
         }

@@ -409,20 +409,15 @@ pub fn attach_parts(
     let (mut crop, mut ids) = (Vec::new(), Vec::new());
     b.crop(part, width, &mut crop);
     let stats = components(&crop, b.width(), b.height(), true, &mut ids);
-    // Pixels of each piece that touch the suit.
+    // Pixels of each piece that touch the suit, and its bounding box (x0, x1, y0, y1) in the crop.
     let mut contact = vec![0usize; stats.len()];
+    let mut boxes = vec![(usize::MAX, 0, usize::MAX, 0); stats.len()];
     for (k, &id) in ids.iter().enumerate() {
         if id != u32::MAX {
             let i = b.grid_index(k, width);
             let mut touches = false;
             for_each_neighbour(i, width, height, |j| touches |= person[j] && !part[j]);
             contact[id as usize] += touches as usize;
-        }
-    }
-    // Bounding box of each piece: (x0, x1, y0, y1) in the crop.
-    let mut boxes = vec![(usize::MAX, 0, usize::MAX, 0); stats.len()];
-    for (k, &id) in ids.iter().enumerate() {
-        if id != u32::MAX {
             let (x, y) = (k % b.width(), k / b.width());
             let e = &mut boxes[id as usize];
             *e = (e.0.min(x), e.1.max(x), e.2.min(y), e.3.max(y));
