@@ -242,11 +242,9 @@ pub fn write_body_pattern(
 ) -> Result<Vec<PathBuf>, PatternError> {
     check_dpi(options.dpi)?;
     let note = subject_note(subject);
-    let panels: Vec<Panel> = body
-        .parts
-        .iter()
-        .filter(|p| p.material == Material::Suit)
-        .map(|part| panel(suit, part, &note))
+    let panels: Vec<Panel> = (0..body.parts.len())
+        .filter(|&index| body.parts[index].material == Material::Suit)
+        .map(|index| panel(suit, body, index, &note))
         .collect();
     // Refuse an oversized print before writing anything.
     for p in &panels {
@@ -420,8 +418,10 @@ pub fn offset_polygon(points: &[Point], distance: f32) -> Vec<Point> {
         .collect()
 }
 
-/// The flat panel of one body part for `suit`; `subject` is the line naming who it is made for.
-pub fn panel(suit: &SuitDefinition, part: &BodyPart, subject: &str) -> Panel {
+/// The flat panel of part `index` of `body` for `suit`, with the markers printed on it
+/// ([`Body::marker_grid`]); `subject` is the line naming who it is made for.
+pub fn panel(suit: &SuitDefinition, body: &Body, index: usize, subject: &str) -> Panel {
+    let part = &body.parts[index];
     let us = outline_samples(part);
     let widest = us
         .iter()
@@ -448,7 +448,7 @@ pub fn panel(suit: &SuitDefinition, part: &BodyPart, subject: &str) -> Panel {
         }
     }
 
-    let grid = part.marker_grid(suit);
+    let grid = body.marker_grid(index, suit);
     let half = suit.marker_size_cm * 0.5;
     let markers: Vec<PanelMarker> = grid
         .cells()
@@ -1086,6 +1086,14 @@ mod tests {
         }
     }
 
+    /// The cylinder alone, as a body.
+    fn lone_cylinder() -> Body {
+        Body {
+            parts: vec![cylinder()],
+            rest_pose: vec![glam::Affine3A::IDENTITY],
+        }
+    }
+
     const PERIMETER: f32 = std::f32::consts::TAU * 10.0; // 62.83 cm
 
     fn attribute(svg: &str, name: &str) -> String {
@@ -1097,7 +1105,7 @@ mod tests {
 
     #[test]
     fn cylinder_panel_has_true_size_in_svg_and_png() {
-        let p = panel(&suit(), &cylinder(), "subject test");
+        let p = panel(&suit(), &lone_cylinder(), 0, "subject test");
         // Width: perimeter + 2 × (1 cm allowance + 1 cm margin) = 66.83 cm; height: 50 cm of tube
         // (30 + two 10 cm caps) + 4 cm + 3 cm footer = 57 cm.
         assert!(
@@ -1134,7 +1142,7 @@ mod tests {
     fn markers_are_where_the_body_model_puts_them() {
         let s = suit();
         let part = cylinder();
-        let p = panel(&s, &part, "subject test");
+        let p = panel(&s, &lone_cylinder(), 0, "subject test");
         // Marker 7 + 8 + 1 (row 2, column 1) on the straight section: u = 8 cm, s = 1.5 / 8.
         let cell = part.markers(&s)[7 + 8 + 1];
         assert_eq!(cell.id, 20201);
@@ -1205,7 +1213,7 @@ mod tests {
 
     #[test]
     fn allowance_lies_one_centimetre_outside_the_stitch_line() {
-        let p = panel(&suit(), &cylinder(), "subject test");
+        let p = panel(&suit(), &lone_cylinder(), 0, "subject test");
         // On the straight section the stitch line is vertical at x = 2 and x = 2 + 62.83.
         let left = p.cut.iter().map(|q| q[0]).fold(f32::INFINITY, f32::min);
         let right = p.cut.iter().map(|q| q[0]).fold(f32::NEG_INFINITY, f32::max);

@@ -331,6 +331,7 @@ mod tests {
     fn round_part_is_one_capsule_of_the_mean_radius() {
         let body = Body {
             parts: vec![part(Vec2::new(5.0, 4.6), Vec2::new(4.0, 4.0), 1.0)],
+            rest_pose: vec![glam::Affine3A::IDENTITY],
         };
         let proxies = body_proxies(&body, 0.5);
         assert_eq!(proxies.len(), 1);
@@ -346,6 +347,7 @@ mod tests {
         // ends pulled in by 10 − 7 = 3 cm.
         let body = Body {
             parts: vec![part(Vec2::new(15.0, 10.0), Vec2::new(15.0, 10.0), 0.7)],
+            rest_pose: vec![glam::Affine3A::IDENTITY],
         };
         let proxies = body_proxies(&body, 0.5);
         assert_eq!(proxies.len(), 3);

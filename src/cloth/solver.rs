@@ -2006,7 +2006,8 @@ mod tests {
             },
         ])
         .expect("skeleton");
-        BodyRig::new(skeleton, Body { parts }, 0.0)
+        let body = Body::from_parts(parts, &skeleton);
+        BodyRig::new(skeleton, body, 0.0)
     }
 
     fn bar(start: Vec3, end: Vec3, radius: f32) -> BodyPart {

@@ -41,10 +41,9 @@
 //! fifths were markers whose detection another truth marker of their colour took, mostly one of
 //! another body part where the generator's part meshes overlapped at a joint and both printed
 //! their grid (two squares a few pixels apart, one component; `examples/marker_misses.rs` counts
-//! them); the generator no longer prints markers on the capsule ends that meet end to end (elbows,
-//! knees, the waist; 2026-12-03), and 300 of the 1,067 misses left on the README's sequences are
-//! still such, most at the shoulders and hips, where a limb's capsule rises out of the side of the
-//! trunk's and both grids still print. Most of the
+//! them); the generator now prints one grid where capsules overlap (2026-12-03, `body.rs`), and
+//! 115 of the 786 misses left on the README's sequences are detections taken by another part, most
+//! of them an upper arm against the chest. Most of the
 //! rest are markers seen edge-on whose thin strip blends with the cloth into grey or brown that
 //! fails the gates, leaving a component of a pixel or two; with the segmenter's masks the false markers
 //! are background inside the leaked mask, about half of them on its edge. Tried and dropped:

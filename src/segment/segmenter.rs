@@ -35,7 +35,7 @@ use super::cleanup::{
     PixelBox, RegionRule, PART_REACH,
 };
 use super::features::{
-    colour_index, contrast_bin, downscale, is_pattern_seed, is_suit_pattern, temporal_bin,
+    colour_index, contrast_bin, downscale, is_near_pattern, is_suit_pattern, temporal_bin,
     ColourLut, FrameFeatures, MarkerGate, COLOUR_BINS, PATTERN_CLASSES, TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
@@ -462,10 +462,11 @@ impl Segmenter {
         let started = Instant::now();
         // The suit is where its pattern is: cut pixels far from any pixel of the pattern are not it
         // (a yellow-green or orange region next to the suit that the smoothness pulled in). This is
-        // `features::suit_support` on the cut's pixels only: a 3-4 chamfer distance of at most
-        // 3 · SUIT_RADIUS = 6 is one of these 13 offsets.
+        // `features::suit_support` on the cut's pixels only, with the looser seeds of
+        // `features::is_near_pattern`: a 3-4 chamfer distance of at most 3 · SUIT_RADIUS = 6 is
+        // one of these 13 offsets.
         {
-            let seed = |j: usize| is_pattern_seed(&self.features, &self.gate, j);
+            let seed = |j: usize| is_near_pattern(&self.features, &self.gate, j);
             const NEAR: [(isize, isize); 13] = [
                 (0, 0),
                 (-1, 0),

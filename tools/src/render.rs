@@ -120,12 +120,13 @@ impl<'a> BodyRenderer<'a> {
         camera: Camera,
     ) -> BodyRenderer<'a> {
         let meshes = body.parts.iter().map(|p| p.mesh(24, 4.0)).collect();
-        let grids = body.parts.iter().map(|p| p.marker_grid(suit)).collect();
-        let markers: Vec<(usize, MarkerCell)> = body
-            .parts
+        let grids: Vec<MarkerGrid> = (0..body.parts.len())
+            .map(|i| body.marker_grid(i, suit))
+            .collect();
+        let markers: Vec<(usize, MarkerCell)> = grids
             .iter()
             .enumerate()
-            .flat_map(|(i, p)| p.markers(suit).into_iter().map(move |m| (i, m)))
+            .flat_map(|(i, grid)| grid.cells().map(move |m| (i, m)))
             .collect();
         let marker_index = markers
             .iter()
