@@ -126,6 +126,7 @@ fn runs_off_mask(border: &Border) -> bool {
             || (runs_on >= RUNS_ON_MOSTLY * border.outside as f32
                 && runs_on >= MAX_RUN_ON_SHARE_MOSTLY_OUTSIDE * whole))
 }
+
 /// Share of a marker's in-mask border that must be cloth.
 const MIN_CLOTH_BORDER: f32 = 0.4;
 /// Share of its colour's printed saturation that a marker's most saturated pixel must reach.

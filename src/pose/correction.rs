@@ -119,7 +119,8 @@ pub const ROOT_BEHIND_SURFACE_CM: f32 = 10.0;
 /// sequences (median estimated / true depth 0.988, `suitcap-train eval` prints it); 0.97 gave 0.998
 /// (0.972–1.019 per sequence). Since it also leaves out the markers where two parts overlap at the
 /// shoulders and hips (`SEAM_MARGIN_CM` in `body.rs`), whose seams lengthen some nearest-neighbour
-/// distances, 0.97 gave 0.982 (0.959–1.003) on the same six, so the constant became 0.97 / 0.982.
+/// distances, 0.97 gave 0.982 (0.959–1.003) on the same six, so the constant became 0.97 / 0.982
+/// (1.002 with it, 0.979–1.023; the same after the detector's sliver rule).
 pub const DETECTED_PITCH_SHORTFALL: f32 = 0.99;
 
 /// Depth (cm) of the suit's surface from the marker grid: the 95th percentile of each marker's
