@@ -10,7 +10,9 @@
 //! `VERBOSE=1` lists every miss (with its marker id and the id of the truth marker that took its
 //! detection, if one did) and every false detection; `DUMP=FILE` appends one CSV row per detection
 //! (dataset, masks, frame, colour, area, border inside / cloth / outside, peak saturation, border
-//! running on past the mask, correct, tolerance, x, y) for looking at the tests' statistics.
+//! running on past the mask, correct, tolerance, x, y, whether the truth marker it was paired with
+//! counts for recall, brightest value, summed value of the cloth on its border) for looking at the
+//! tests' statistics.
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -111,6 +113,13 @@ fn main() -> anyhow::Result<()> {
                 }
                 *miss_reasons.entry(reason).or_default() += 1;
             }
+            // Per detection: whether the truth marker it was paired with counts for recall.
+            let mut counted_match = vec![false; dets.len()];
+            for (t, d) in paired.iter().enumerate() {
+                if let Some(d) = *d {
+                    counted_match[d] = counts(&expected[t]);
+                }
+            }
             if let Ok(path) = std::env::var("DUMP") {
                 use std::io::Write;
                 let mut out = std::fs::OpenOptions::new()
@@ -120,7 +129,7 @@ fn main() -> anyhow::Result<()> {
                 for (d, c) in dets.iter().enumerate() {
                     writeln!(
                         out,
-                        "{},{},{index},{},{},{},{},{},{},{},{},{},{:.1},{:.1}",
+                        "{},{},{index},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{},{},{}",
                         data.display(),
                         args[1],
                         c.marker.colour,
@@ -133,7 +142,10 @@ fn main() -> anyhow::Result<()> {
                         dm[d] as u8,
                         tol,
                         c.marker.centre.x,
-                        c.marker.centre.y
+                        c.marker.centre.y,
+                        counted_match[d] as u8,
+                        c.peak_value,
+                        c.border.cloth_value
                     )?;
                 }
             }
