@@ -11,7 +11,8 @@
 //!
 //! Environment overrides of the live settings, for experiments: `CLOTH_SUBSTEPS`, `CLOTH_SWEEPS`,
 //! `CLOTH_RHO` (Chebyshev ρ, 0 = plain sweeps), `CLOTH_LIMIT` (strain limit, 0 = off),
-//! `CLOTH_COMPRESSION`, `CLOTH_TETHER_SLACK`,
+//! `CLOTH_COMPRESSION`, `CLOTH_TETHER_SLACK`, `CLOTH_CUFF_SLIDE` (cm a sleeve end may slide up the
+//! arm before it is held), `CLOTH_CUFF_TAU` (its hold's time constant, s),
 //! `CLOTH_TAU` (loose-anchor time constant, s), `CLOTH_BEND_SCALE` (× the bending compliance),
 //! `CLOTH_COUNTS` (vertex counts, e.g. `2500,3300`), `CLOTH_MATERIAL` (a preset name, default
 //! medium). `CLOTH_MODE=quality`: the quality mode of `suitcap run` / `drape` instead (its
@@ -77,6 +78,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if let Some(v) = env("CLOTH_LIMIT") {
         settings.strain_limit = v;
+    }
+    if let Some(v) = env("CLOTH_CUFF_SLIDE") {
+        settings.cuff_slide_cm = v;
+    }
+    if let Some(v) = env("CLOTH_CUFF_TAU") {
+        settings.cuff_hold_seconds = v;
     }
     if let Some(v) = env("CLOTH_COMPRESSION") {
         settings.compression = v;
@@ -151,8 +158,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     "no sleeves".to_string()
                 } else {
                     format!(
-                        "sleeve ends ≤ {:.1} cm off the arm",
-                        summary.cuff_gap_max_cm
+                        "sleeve ends ≤ {:.1} cm off the arm, {:.1} cm up it (mean; most {:.1})",
+                        summary.cuff_gap_max_cm,
+                        summary.cuff_slide_mean_cm,
+                        summary.cuff_slide_max_cm
                     )
                 };
                 println!(

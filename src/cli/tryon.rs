@@ -649,7 +649,7 @@ pub fn drape(
         let cloth = stage.advance(motion.frame(k), k as f64 / fps, true, &empty, &camera)?;
         vertices = cloth.positions.len();
         if let Some(q) = cloth.quality {
-            quality.push(q);
+            quality.push((k, q));
         }
         cloth_ms.push(cloth.milliseconds);
         let pose =
@@ -662,10 +662,14 @@ pub fn drape(
     }
     bar.finish_and_clear();
     preview.finish()?;
+    // The largest value of a quality figure over the frames, and the frame it was in.
     let worst = |f: fn(&suitcap::cloth::solver::FrameQuality) -> f32| {
-        quality.iter().map(f).fold(0.0f32, f32::max)
+        quality
+            .iter()
+            .map(|(k, q)| (f(q), *k))
+            .fold((0.0f32, 0), |a, b| if b.0 > a.0 { b } else { a })
     };
-    let mut p95s: Vec<f32> = quality.iter().map(|q| q.strain_p95).collect();
+    let mut p95s: Vec<f32> = quality.iter().map(|(_, q)| q.strain_p95).collect();
     p95s.sort_by(f32::total_cmp);
     println!(
         "{} frames of {} ({} vertices, {:?} mode, {}) → {}/frames/ and {}/preview.gif; {} unreadable frames skipped",
@@ -682,11 +686,14 @@ pub fn drape(
         println!("  skipped: {s}");
     }
     println!(
-        "quality: edge strain 95th percentile median {:.2} % (worst frame {:.2} %), maximum {:.2} %; deepest vertex inside a capsule at a frame's end {:.2} mm",
+        "quality: edge strain 95th percentile median {:.2} % (worst frame {:.2} %, frame {}), maximum {:.2} % (frame {}); deepest vertex inside a capsule at a frame's end {:.2} mm (frame {})",
         p95s.get(p95s.len() / 2).copied().unwrap_or(0.0) * 100.0,
-        worst(|q| q.strain_p95) * 100.0,
-        worst(|q| q.strain_max) * 100.0,
-        worst(|q| q.penetration_cm) * 10.0
+        worst(|q| q.strain_p95).0 * 100.0,
+        worst(|q| q.strain_p95).1,
+        worst(|q| q.strain_max).0 * 100.0,
+        worst(|q| q.strain_max).1,
+        worst(|q| q.penetration_cm).0 * 10.0,
+        worst(|q| q.penetration_cm).1
     );
     println!(
         "time: cloth {:.2} ms, render + composite {:.2} ms per frame (medians)",
