@@ -49,9 +49,10 @@
 //!      the hold without the slack test (sleeves 4.7–7.1 cm up) kept the strain targets on
 //!      fifteen of the cases but left a sleeve-end vertex 2.4–2.9 mm inside an arm where it meets
 //!      the chest (kick 11_01, and `suitcap drape` on the quick start's clip); leaving out the
-//!      sleeve-end vertices within 2 cm of the trunk instead, 3 of 15 cases went over 10 %; stronger holds (2 cm / 20 ms, 1 cm / 10 ms with the
-//!      slack test) put one or two cases over 10 %; held while dressing, the dance's quality
-//!      T-shirt tore at the armpit (110 %) in its first frame;
+//!      sleeve-end vertices within 2 cm of the trunk instead, 3 of 15 cases went over 10 %;
+//!      stronger holds (2 cm / 20 ms, 1 cm / 10 ms with the slack test) put one or two cases over
+//!      10 %; held while dressing, the dance's quality T-shirt tore at the armpit (110 %) in its
+//!      first frame;
 //!    - **tethers** (long-range attachments, Kim, Tang and Zordan 2012): each free vertex may be no
 //!      farther from its nearest rigid anchor than its geodesic rest distance, found by Dijkstra
 //!      from all rigid anchors over two-ring steps of the mesh (paths along edges alone zigzag and
@@ -2644,7 +2645,6 @@ mod tests {
             cloth.quality()
         };
         let held = slide_after_walk(SolverSettings::live());
-
         let free = slide_after_walk(SolverSettings {
             cuff_slide_cm: f32::INFINITY,
             ..SolverSettings::live()

@@ -416,8 +416,8 @@ struct Scratch {
 
 impl Scratch {
     /// Groups the labelled pixels into 4-connected fragments of one colour, with their border (a
-    /// side on a pixel of no colour is judged by the pixel one step further out) and their most
-    /// saturated pixel (`saturation` of a grid index).
+    /// side on a pixel of no colour is judged by the pixel one step further out), their most
+    /// saturated and their brightest pixel (`colour_of` a grid index).
     fn fragments(&mut self, grid: Grid, colour_of: impl Fn(usize) -> PixelColour) {
         self.fragment_of.clear();
         self.fragment_of.resize(self.labels.len(), UNSEEN);
