@@ -671,6 +671,9 @@ pub fn drape(
     };
     let mut p95s: Vec<f32> = quality.iter().map(|(_, q)| q.strain_p95).collect();
     p95s.sort_by(f32::total_cmp);
+    let (p95_worst, p95_frame) = worst(|q| q.strain_p95);
+    let (strain_max, strain_frame) = worst(|q| q.strain_max);
+    let (depth_max, depth_frame) = worst(|q| q.penetration_cm);
     println!(
         "{} frames of {} ({} vertices, {:?} mode, {}) → {}/frames/ and {}/preview.gif; {} unreadable frames skipped",
         quality.len(),
@@ -688,12 +691,12 @@ pub fn drape(
     println!(
         "quality: edge strain 95th percentile median {:.2} % (worst frame {:.2} %, frame {}), maximum {:.2} % (frame {}); deepest vertex inside a capsule at a frame's end {:.2} mm (frame {})",
         p95s.get(p95s.len() / 2).copied().unwrap_or(0.0) * 100.0,
-        worst(|q| q.strain_p95).0 * 100.0,
-        worst(|q| q.strain_p95).1,
-        worst(|q| q.strain_max).0 * 100.0,
-        worst(|q| q.strain_max).1,
-        worst(|q| q.penetration_cm).0 * 10.0,
-        worst(|q| q.penetration_cm).1
+        p95_worst * 100.0,
+        p95_frame,
+        strain_max * 100.0,
+        strain_frame,
+        depth_max * 10.0,
+        depth_frame
     );
     println!(
         "time: cloth {:.2} ms, render + composite {:.2} ms per frame (medians)",

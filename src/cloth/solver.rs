@@ -1400,10 +1400,10 @@ impl Cloth {
                     self.x[e.i as usize].distance(self.x[e.j as usize]) < e.rest
                 })
             };
-            if hold > 0.0 && slack() {
+            if hold > 0.0 {
                 if let Some(capsule) = self.pose.capsules.get(c.axis_capsule) {
                     let excess = c.rest_along - slide - along_axis(capsule, self.x[v]);
-                    if excess > 0.0 {
+                    if excess > 0.0 && slack() {
                         let axis =
                             (Vec3A::from(capsule.b) - Vec3A::from(capsule.a)).normalize_or_zero();
                         self.x[v] += axis * (excess * hold);

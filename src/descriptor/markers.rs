@@ -468,13 +468,13 @@ impl Scratch {
                             (label == colour | OUTSIDE && further == Some(colour | OUTSIDE)) as u32;
                     } else {
                         fragment.border.inside += 1;
-                        let beyond = (label == NONE)
-                            .then(|| grid.step(i, (2 * side.0, 2 * side.1)))
-                            .flatten()
-                            .map(|k| self.labels[k]);
-                        let cloth = match (label, beyond) {
-                            (CLOTH, _) => Some(j),
-                            (_, Some(CLOTH)) => grid.step(i, (2 * side.0, 2 * side.1)),
+                        // The cloth pixel this side meets: its neighbour, or past a pixel of no
+                        // colour the one beyond.
+                        let cloth = match label {
+                            CLOTH => Some(j),
+                            NONE => grid
+                                .step(i, (2 * side.0, 2 * side.1))
+                                .filter(|&k| self.labels[k] == CLOTH),
                             _ => None,
                         };
                         if let Some(k) = cloth {
