@@ -29,19 +29,21 @@
 //!   rings are stitched by walking both in step by arc-length fraction.
 //! - **Dress.** The T-shirt's bodice (fitted: following the body's cross-sections) from the natural
 //!   waist (the abdomen joint) up, with armholes and shoulder straps but no sleeves and a square
-//!   neckline (the columns within the neck's reach stay open down to the top ring), continued below the waist
-//!   by the skirt's rings flaring by 12° (an A-line, [`DRESS_FLARE_DEG`]), all in one mesh.
+//!   neckline (the columns within the neck's reach stay open down to the top ring), continued
+//!   below the waist by the skirt's rings flaring by 12° (an A-line, [`DRESS_FLARE_DEG`]), all in
+//!   one mesh.
 //!
 //! Triangles are wound so that `(b − a) × (c − a)` points away from the body, consistently across
 //! the whole mesh. Finally every vertex still closer than half the ease to a capsule (a disc between
 //! fitted directions, a sleeve over the arm) is pushed out to that distance.
 //!
 //! **Anchors** are vertices bound to a bone (bone index, position in the bone's frame at rest):
-//! for the T-shirt the neckline loop and two rings of its neighbours (chest bone), for the skirt the waistband's
-//! two top rings (hip bone), for the dress its neckline up to the neck joint's height (chest bone;
-//! the head tilting forward reaches the strap tops beside the neck) rigidly and its waist ring to the
-//! hip loosely (within [`DRESS_WAIST_SLACK_CM`]: bending the spine lengthens the back between the
-//! two bones by a few centimetres, which two rigid rings would force into the bodice as stretch).
+//! for the T-shirt the neckline loop and two rings of its neighbours (chest bone), for the skirt
+//! the waistband's two top rings (hip bone), for the dress its neckline up to the neck joint's
+//! height (chest bone; the head tilting forward reaches the strap tops beside the neck) rigidly and
+//! its waist ring to the hip loosely (within [`DRESS_WAIST_SLACK_CM`]: bending the spine lengthens
+//! the back between the two bones by a few centimetres, which two rigid rings would force into the
+//! bodice as stretch).
 //!
 //! Hands to the solver: a [`GarmentMesh`] — rest positions in world centimetres, triangles, anchors
 //! and cuffs.
@@ -578,8 +580,8 @@ enum Neckline {
 /// and two (maxima 10.1–13.8 %, single armpit edges), 3.5 and 5 cm one and two (10.3 %; 10.3 % and
 /// a p95 of 2.07 %), 4 cm none; with one ring, as the square neck had, 4 cm left one (p95 2.22 %).
 /// The opening is centred on the neck's axis, which stands behind the chest's middle, so it dips
-/// lower at the back than at the front, unlike a tailored crew neck;
-/// centred 2 or 3 cm further forward it put two of the 18 cases over the maximum (10.2–11.5 %).
+/// lower at the back than at the front, unlike a tailored crew neck; centred 2 or 3 cm further
+/// forward it put two of the 18 cases over the maximum (10.2–11.5 %).
 /// Against the square neckline of before (the columns within the neck's reach open down to the
 /// shoulder line, the straps' inner edges anchored), every case stays within the targets (95th
 /// percentile 0.36–1.84 % against 0.43–1.67 %, maxima ≤ 9.93 % against ≤ 9.44 %), and the sleeve
@@ -665,8 +667,7 @@ fn build_bodice(
     // Straps: front column k (0 < k < n/2) to its mirror n − k over the shoulder, along a path
     // clear of the trunk and arms. A square neckline leaves the columns within the neck's reach
     // open; a crew neckline runs every column over and cuts out what lies within `neck_half` of the
-    // neck's axis, so the opening is round, deep at the front (where the chest is) and shallow at
-    // the back.
+    // neck's axis, so the opening is round (see `CREW_NECK_EASE_CM`).
     let strap_columns: Vec<usize> = (1..n / 2)
         .filter(|&k| {
             grid[top][k].is_some()
