@@ -3,10 +3,10 @@
 //! `cargo run --release --example garment_views -- MOTION.bvh FRAME OUT.png [tshirt|skirt|dress] [live]`
 //! Simulates the motion's frames 0..=FRAME (quality mode unless `live`, sized for the motion's own
 //! skeleton) and draws the capsules in grey and the garment over them from the world's +Z, +X, −Z
-//! and −X (the rest pose faces +Z), side by side, looking at the body's middle. Frames whose
-//! maximum edge strain passes 10 % or whose deepest vertex is more than 2 mm inside a capsule are
-//! listed. `VIEW_SIZE` (pixels per view, default 360) and `VIEW_FOV` (horizontal degrees, default
-//! 30; e.g. 16 for a closer look) change the views.
+//! and −X (the rest pose faces +Z), side by side, looking at the chest (25 cm above the capsules'
+//! mean). Frames whose maximum edge strain passes 10 % or whose deepest vertex is more than 2 mm
+//! inside a capsule are listed. `VIEW_SIZE` (pixels per view, default 360) and `VIEW_FOV`
+//! (horizontal degrees, default 30; e.g. 16 for a closer look) change the views.
 use std::path::Path;
 
 use glam::Vec3;
@@ -81,7 +81,8 @@ fn main() -> anyhow::Result<()> {
     let mut buf = Vec::new();
     for c in &cloth.capsules {
         buf.clear();
-        if let Some(cone) = mesh.vertices(c, 0.5, &mut buf) {
+        // Shrunk as the renderer's depth pass shrinks them, so cloth lying on the body shows.
+        if let Some(cone) = mesh.vertices(c, RenderSettings::default().capsule_inset, &mut buf) {
             let base = bv.len() as u32;
             bv.extend_from_slice(&buf);
             bt.extend(mesh.triangles(cone).iter().map(|t| t.map(|i| i + base)));
