@@ -731,12 +731,12 @@ mod tests {
             assert_eq!((w, h), (9 / f as usize, 7 / f as usize));
             for (k, p) in out.iter().enumerate() {
                 let (x, y) = ((k % w) as u32 * f, (k / w) as u32 * f);
-                for c in 0..3 {
+                for (c, &value) in p.iter().enumerate() {
                     let sum: u32 = (0..f * f)
                         .map(|i| img.get_pixel(x + i % f, y + i / f)[c] as u32)
                         .sum();
                     assert_eq!(
-                        p[c] as u32,
+                        value as u32,
                         (sum + f * f / 2) / (f * f),
                         "factor {f} pixel {k}"
                     );
