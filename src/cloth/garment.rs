@@ -1605,6 +1605,32 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn every_built_in_subject_gets_every_garment_in_both_modes() {
+        // The smallest subject's shoulders must still leave room around the crew neck. (Only
+        // that the garments are made, whole and anchored: ana's 2 cm T-shirt has one edge of
+        // 0.34 × the mean where the sleeve's first ring meets the armhole at the armpit, under
+        // `check_garment`'s 0.4.)
+        let clip =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        let motion = crate::bvh::Motion::load(&clip).expect("clip");
+        for index in 0..6 {
+            let subject = crate::body::Subject::find(&index.to_string()).expect("subject");
+            let rig =
+                BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig");
+            for params in [GarmentParams::live(), GarmentParams::quality()] {
+                for kind in GarmentKind::ALL {
+                    let mesh = GarmentMesh::generate(kind, &rig, &params)
+                        .unwrap_or_else(|e| panic!("{} {kind:?}: {e}", subject.name));
+                    let loops = boundary_loops(&mesh.triangles).len();
+                    let expected = if kind == GarmentKind::Skirt { 2 } else { 4 };
+                    assert_eq!(loops, expected, "{} {kind:?}", subject.name);
+                    assert!(!mesh.anchors.is_empty(), "{} {kind:?}", subject.name);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn quality_mode_has_about_four_times_the_vertices() {
         let rig = chidi();
         let live =
