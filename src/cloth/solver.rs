@@ -480,10 +480,12 @@ struct CuffLimit {
     rest_along: f32,
 }
 
-/// A vertex's coordinate along a capsule's axis (cm from its `a` end towards `b`).
-fn along_axis(capsule: &Capsule, p: Vec3A) -> f32 {
+/// A vertex's coordinate along a capsule's axis (cm from its `a` end towards `b`), and that unit
+/// axis.
+fn along_axis(capsule: &Capsule, p: Vec3A) -> (f32, Vec3A) {
     let (a, b) = (Vec3A::from(capsule.a), Vec3A::from(capsule.b));
-    (p - a).dot((b - a).normalize_or_zero())
+    let axis = (b - a).normalize_or_zero();
+    ((p - a).dot(axis), axis)
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -615,7 +617,7 @@ impl Cloth {
                 rest_pose.capsules.get(axis_capsule),
                 garment.positions.get(c.vertex as usize),
             ) {
-                (Some(capsule), Some(&p)) => along_axis(capsule, p.into()),
+                (Some(capsule), Some(&p)) => along_axis(capsule, p.into()).0,
                 _ => 0.0,
             };
             cuffs.push(CuffLimit {
@@ -1402,10 +1404,9 @@ impl Cloth {
             };
             if hold > 0.0 {
                 if let Some(capsule) = self.pose.capsules.get(c.axis_capsule) {
-                    let excess = c.rest_along - slide - along_axis(capsule, self.x[v]);
+                    let (along, axis) = along_axis(capsule, self.x[v]);
+                    let excess = c.rest_along - slide - along;
                     if excess > 0.0 && slack() {
-                        let axis =
-                            (Vec3A::from(capsule.b) - Vec3A::from(capsule.a)).normalize_or_zero();
                         self.x[v] += axis * (excess * hold);
                     }
                 }
@@ -1769,7 +1770,7 @@ impl Cloth {
                         .capsules
                         .get(c.axis_capsule)
                         .map_or(0.0, |capsule| {
-                            c.rest_along - along_axis(capsule, self.x[c.vertex as usize])
+                            c.rest_along - along_axis(capsule, self.x[c.vertex as usize]).0
                         })
                 })
                 .sum::<f32>()
