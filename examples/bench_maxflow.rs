@@ -12,16 +12,7 @@ use std::time::Instant;
 
 use suitcap::segment::gcg::read_gcg;
 use suitcap::segment::maxflow::GridMaxFlow;
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
+use suitcap::stats::median;
 
 /// Runs the peer and returns (median ms, flow) parsed from its output.
 fn run_peer(py: &str, script: &str, file: &str, reps: usize) -> Result<(f64, f64, String), String> {
@@ -124,7 +115,7 @@ fn main() -> ExitCode {
     let fg = result.labels.iter().filter(|&&l| l).count();
     let cut = g.cut_cost(&result.labels);
     let min = times.iter().cloned().fold(f64::INFINITY, f64::min);
-    let med = median(&mut times);
+    let med = median(&times).unwrap_or(f64::NAN);
     println!("file {file}: {}x{} (W x H)", g.width(), g.height());
     println!(
         "ours: flow = {:.6}  cut_cost_f64 = {:.6}  source_side_nodes = {fg}",

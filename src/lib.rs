@@ -14,7 +14,7 @@
 //! [`pipeline`] joins those per stream. [`body_size`], [`cloth`], [`render`] and [`composite`] put a
 //! garment on the estimated body and into the frame; [`tryon`] runs every stage on threads joined by
 //! [`queue`]s. Around them: [`suit`], [`skeleton`] and [`bvh`], [`camera`], [`body`], [`raster`],
-//! [`colour`], [`dataset`], [`model`], [`pattern`], [`preview`] and [`io`].
+//! [`colour`], [`dataset`], [`model`], [`pattern`], [`preview`], [`stats`] and [`io`].
 
 pub mod body;
 pub mod body_size;
@@ -38,5 +38,6 @@ pub mod render;
 pub mod segment;
 pub mod skeleton;
 pub mod source;
+pub mod stats;
 pub mod suit;
 pub mod tryon;

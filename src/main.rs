@@ -18,6 +18,7 @@ use suitcap::mask::Mask;
 use suitcap::segment::{Segmenter, SegmenterOptions, SegmenterTables, StageTimes};
 use suitcap::source::directory::list_frame_files;
 use suitcap::source::{open_source, SourceError, SourceOptions};
+use suitcap::stats::median;
 use suitcap::suit::SuitDefinition;
 
 mod cli;
@@ -468,20 +469,18 @@ fn segment(
          {removed_px} stray person pixels removed, {filled_px} hole pixels filled (at the cut's resolution)"
     );
     if !times.is_empty() {
-        let median = |f: &dyn Fn(&StageTimes) -> f64| {
-            let mut v: Vec<f64> = times.iter().map(f).collect();
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
+        let stage_median = |f: &dyn Fn(&StageTimes) -> f64| {
+            median(&times.iter().map(f).collect::<Vec<_>>()).unwrap_or(0.0)
         };
         println!(
             "median ms per frame: features {:.2}, graph {:.2}, cut {:.2}, clean-up {:.2}, refine {:.2}, history {:.2}, total {:.2}",
-            median(&|t| t.features),
-            median(&|t| t.graph),
-            median(&|t| t.cut),
-            median(&|t| t.cleanup),
-            median(&|t| t.refine),
-            median(&|t| t.history),
-            median(&|t| t.total())
+            stage_median(&|t| t.features),
+            stage_median(&|t| t.graph),
+            stage_median(&|t| t.cut),
+            stage_median(&|t| t.cleanup),
+            stage_median(&|t| t.refine),
+            stage_median(&|t| t.history),
+            stage_median(&|t| t.total())
         );
     }
     if !scored.is_empty() {
@@ -611,8 +610,7 @@ fn describe(
         suitcap::io::write_atomic(path, marker_rows.as_bytes())
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    times.sort_by(f64::total_cmp);
-    let median = times.get(times.len() / 2).copied().unwrap_or(0.0);
+    let median = median(&times).unwrap_or(0.0);
     let mean_markers = counts.iter().sum::<usize>() as f64 / counts.len().max(1) as f64;
     println!("{frames} {} descriptors ({} values) written to {}; median {median:.2} ms per frame, {mean_markers:.0} markers per frame; {} corrupt frames skipped", kind.name(), kind.len(), out.display(), skipped.len());
     if truth.is_some() {

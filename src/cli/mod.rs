@@ -3,9 +3,7 @@
 pub mod bench;
 pub mod tryon;
 
-/// The median of `values` (the upper one of an even count); 0 when empty.
+/// The median of `values` for a report; 0 when empty.
 pub fn median(values: &[f64]) -> f64 {
-    let mut sorted = values.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    sorted.get(sorted.len() / 2).copied().unwrap_or(0.0)
+    suitcap::stats::median(values).unwrap_or(0.0)
 }

@@ -570,6 +570,32 @@ enum Neckline {
     Crew,
 }
 
+impl Neckline {
+    /// How much wider than the neck with its ease the opening is, cm.
+    fn extra_room_cm(self) -> f32 {
+        match self {
+            Neckline::Square => 0.0,
+            Neckline::Crew => CREW_NECK_EASE_CM,
+        }
+    }
+
+    /// Whether the strap of the front column at `x` (cm from the middle) runs over the shoulder
+    /// when the opening is `neck_half` wide: a square neckline leaves the columns within the neck's
+    /// reach open, a crew neckline runs every column over and cuts the opening out afterwards.
+    fn has_strap(self, x: f32, neck_half: f32) -> bool {
+        self == Neckline::Crew || x.abs() >= neck_half
+    }
+
+    /// The body parts the straps' paths need not clear: the head always; the neck too when the
+    /// round opening is cut around it afterwards.
+    fn parts_straps_ignore(self) -> &'static [&'static str] {
+        match self {
+            Neckline::Square => &["head"],
+            Neckline::Crew => &["head", "neck"],
+        }
+    }
+}
+
 /// How much wider than the neck (its capsule plus the ease) a T-shirt's round neck opening is, cm.
 /// The neckline is anchored to the chest, so the neck bending forward must not reach it: with the
 /// opening at the ease alone the dance's bowed head pressed the front neckline into tears (maximum
@@ -631,11 +657,8 @@ fn build_bodice(
         .abs()
         .max((shoulder.z + arm_radius + 1.0 - spec.zc).abs());
     let x_cut = top_semi.x * (1.0 - (reach / top_semi.y).min(0.9).powi(2)).sqrt();
-    let extra = match neckline {
-        Neckline::Square => 0.0,
-        Neckline::Crew => CREW_NECK_EASE_CM,
-    };
-    let neck_half = (neck_radius + params.ease_cm + extra).min(x_cut - 1.5 * params.edge_cm);
+    let neck_half =
+        (neck_radius + params.ease_cm + neckline.extra_room_cm()).min(x_cut - 1.5 * params.edge_cm);
 
     let rings: Vec<Vec<Vec3>> = spec
         .rings
@@ -672,7 +695,7 @@ fn build_bodice(
         .filter(|&k| {
             grid[top][k].is_some()
                 && grid[top][n - k].is_some()
-                && (neckline == Neckline::Crew || top_ring[k].x.abs() >= neck_half)
+                && neckline.has_strap(top_ring[k].x, neck_half)
         })
         .collect();
     let neck_axis = neck
@@ -683,10 +706,7 @@ fn build_bodice(
         let r = p - neck_axis.0;
         neckline == Neckline::Crew && (r - neck_axis.1 * r.dot(neck_axis.1)).length() < neck_half
     };
-    let ignored: &[&str] = match neckline {
-        Neckline::Square => &["head"],
-        Neckline::Crew => &["head", "neck"],
-    };
+    let ignored = neckline.parts_straps_ignore();
     let clear = 0.5 * params.ease_cm + 0.5;
     let paths: Vec<Vec<Vec3>> = strap_columns
         .iter()

@@ -553,6 +553,9 @@ pub struct Cloth {
     start_frame: Vec<f32>,
     blend_a: Vec<f32>,
     blend_b: Vec<f32>,
+    /// True while [`Cloth::dress`] blends from the rest pose into the first frame: the sleeves
+    /// then ride up freely (no cuff hold).
+    dressing: bool,
     /// The two previous iterates of the Chebyshev-accelerated stretch sweeps.
     sweep_even: Vec<Vec3A>,
     sweep_odd: Vec<Vec3A>,
@@ -759,6 +762,7 @@ impl Cloth {
             start_frame: Vec::new(),
             blend_a: Vec::new(),
             blend_b: Vec::new(),
+            dressing: false,
             sweep_even: Vec::new(),
             sweep_odd: Vec::new(),
             incidence: Adjacency::new(0, &[]),
@@ -1034,7 +1038,7 @@ impl Cloth {
         let blend = self.settings.blend_frames;
         // The sleeves ride up freely while the arms come down from the T-pose, and are drawn back
         // down their arms while the first pose is held.
-        let cuff_slide = std::mem::replace(&mut self.settings.cuff_slide_cm, f32::INFINITY);
+        self.dressing = true;
         let mut a = std::mem::take(&mut self.blend_a);
         let mut b = std::mem::take(&mut self.blend_b);
         for k in 0..blend {
@@ -1050,7 +1054,7 @@ impl Cloth {
         }
         self.blend_a = a;
         self.blend_b = b;
-        self.settings.cuff_slide_cm = cuff_slide;
+        self.dressing = false;
         for _ in 0..self.settings.settle_frames {
             self.step_frame(rig, first_frame, first_frame);
         }
@@ -1275,7 +1279,7 @@ impl Cloth {
         } else {
             1.0
         };
-        let cuff_hold = if self.settings.cuff_slide_cm.is_finite() {
+        let cuff_hold = if self.settings.cuff_slide_cm.is_finite() && !self.dressing {
             1.0 - (-h / self.settings.cuff_hold_seconds).exp()
         } else {
             0.0

@@ -15,6 +15,7 @@ use clap::{Parser, Subcommand};
 use suitcap::dataset::Dataset;
 use suitcap::mask::Mask;
 use suitcap::segment::{train_segmenter, TrainingFrame};
+use suitcap::stats::median;
 use suitcap::suit::SuitDefinition;
 
 #[derive(Parser)]
@@ -779,7 +780,7 @@ fn evaluate(
             );
         }
         depth_ratios_all.extend_from_slice(&depth_ratios);
-        depth_ratio_medians.push(median(&mut depth_ratios));
+        depth_ratio_medians.push(median(&depth_ratios));
         all.merge(&errors);
         per_dataset.push((
             dir.display().to_string(),
@@ -822,7 +823,7 @@ fn evaluate(
             .iter()
             .map(|r| r.map_or("-".to_owned(), |r| format!("{r:.3}")))
             .collect();
-        if let Some(all) = median(&mut depth_ratios_all) {
+        if let Some(all) = median(&depth_ratios_all) {
             println!(
                 "root depth, estimated over true (after the correction): median {all:.3}; per dataset {}",
                 per.join(", ")
@@ -830,12 +831,6 @@ fn evaluate(
         }
     }
     Ok((all, per_dataset))
-}
-
-/// The median of `values` (the upper one of an even count), `None` when empty.
-fn median(values: &mut [f32]) -> Option<f32> {
-    values.sort_by(f32::total_cmp);
-    values.get(values.len() / 2).copied()
 }
 
 fn eval(
