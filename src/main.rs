@@ -128,10 +128,10 @@ enum Command {
         #[arg(long)]
         truth_markers: Option<PathBuf>,
     },
-    /// Estimate the pose in every frame of a recording: OUT/take.bvh (one BVH frame per input frame,
-    /// on the suit's skeleton) and OUT/frames.csv (per frame: person seen, markers, milliseconds).
-    /// The whole pipeline on a recorded input (frame directory or Y4M): pose, garment, compositing.
-    /// Writes OUT/take.bvh, the composited frames OUT/frames/, OUT/preview.gif and OUT/frames.csv.
+    /// The whole pipeline on a recording (frame directory or Y4M): pose, garment, compositing.
+    /// Writes OUT/take.bvh (one BVH frame per input frame, on the suit's skeleton), the composited
+    /// frames OUT/frames/, OUT/preview.gif and OUT/frames.csv (per frame: person seen, markers,
+    /// milliseconds).
     Run {
         /// A directory of frames or a .y4m file.
         input: String,

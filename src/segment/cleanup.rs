@@ -360,8 +360,13 @@ pub const ROUND_FILL: f32 = 0.6;
 /// What an attached part (head, hand, shoe) may look like, in pixels of the grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PartLimits {
-    /// The largest part of any shape.
+    /// The largest part of any shape: a hand or a shoe.
     pub max_area: usize,
+    /// The largest part of any shape that reaches as high as the suit region's top row or higher:
+    /// a head, maybe with a hand in front of it (drinking, waving), which is no longer round.
+    /// Background of a part's colour that the flood runs into beside a limb or between the legs
+    /// is held to `max_area`.
+    pub max_top_area: usize,
     /// The largest round part: one that fills at least [`ROUND_FILL`] of its bounding box, as a
     /// head does (an ellipse fills π/4 of its box). Seen from the side or over a crouch the suit
     /// shows less of its area and a head's piece grows to 12 % of it, while background of a skin
@@ -392,6 +397,7 @@ pub fn attach_parts(
 ) -> usize {
     part.clear();
     part.resize(person.len(), false);
+    let suit_top = person.iter().position(|&p| p).map_or(0, |i| i / width);
     stack.clear();
     stack.extend((0..person.len()).filter(|&i| person[i]));
     while let Some(i) = stack.pop() {
@@ -427,10 +433,11 @@ pub fn attach_parts(
         let area = stats[c].0;
         let (x0, x1, y0, y1) = boxes[c];
         let round = area as f32 >= ROUND_FILL * ((x1 - x0 + 1) * (y1 - y0 + 1)) as f32;
-        let max_area = if round {
-            limits.max_area.max(limits.max_round_area)
-        } else {
-            limits.max_area
+        let at_top = y0 + b.y0 <= suit_top;
+        let max_area = match (round, at_top) {
+            (true, _) => limits.max_area.max(limits.max_round_area),
+            (false, true) => limits.max_area.max(limits.max_top_area),
+            (false, false) => limits.max_area,
         };
         area <= max_area && area as f32 >= limits.min_depth * contact[c] as f32
     };
@@ -579,6 +586,7 @@ mod tests {
         let (mut part, mut stack) = (Vec::new(), Vec::new());
         let limits = |max_area| PartLimits {
             max_area,
+            max_top_area: 0,
             max_round_area: 0,
             min_depth: 0.0,
         };
@@ -617,6 +625,7 @@ mod tests {
         let mut person = suit.clone();
         let deep = PartLimits {
             max_area: 10,
+            max_top_area: 0,
             max_round_area: 0,
             min_depth: 1.5,
         };
@@ -641,6 +650,7 @@ mod tests {
             let mut grown = suit.clone();
             let limits = PartLimits {
                 max_area: 4,
+                max_top_area: 4,
                 max_round_area,
                 min_depth: 0.0,
             };
@@ -652,6 +662,39 @@ mod tests {
         assert!(grown[w + 4] && grown[3 * w + 2] && !grown[5 * w + 2] && !grown[7 * w + 6]);
         let (added, _) = attach(0, &mut part, &mut stack);
         assert_eq!(added, 0);
+    }
+
+    #[test]
+    fn a_ragged_part_at_the_top_may_be_larger_than_one_beside_the_suit() {
+        // Suit in rows 3..=7, columns 2..=3; two ragged pieces of 6 px in 4 × 3 boxes (fill 0.5 <
+        // ROUND_FILL): one on top of the suit reaching above its top row (a head with a hand
+        // before it), one beside it lower down (background between the legs).
+        let (person, w, h) = grid(&[
+            ".....#..", "....##..", "..###...", "..##....", "..####..", "..##.##.", "..##..##",
+            "..##....",
+        ]);
+        let suit: Vec<bool> = (0..w * h)
+            .map(|i| (2..=3).contains(&(i % w)) && i / w >= 3)
+            .collect();
+        let like = |i: usize| person[i];
+        let band: Vec<bool> = suit.iter().map(|&s| !s).collect();
+        let (mut part, mut stack) = (Vec::new(), Vec::new());
+        let mut attach = |max_top_area| {
+            let mut grown = suit.clone();
+            let limits = PartLimits {
+                max_area: 3,
+                max_top_area,
+                max_round_area: 3,
+                min_depth: 0.0,
+            };
+            let added = attach_parts(&mut grown, &band, w, h, like, limits, &mut part, &mut stack);
+            (added, grown)
+        };
+        let (added, grown) = attach(6);
+        assert_eq!(added, 6);
+        assert!(grown[5] && grown[w + 4] && grown[2 * w + 2]);
+        assert!(!grown[4 * w + 4] && !grown[6 * w + 7]);
+        assert_eq!(attach(3).0, 0);
     }
 
     #[test]
