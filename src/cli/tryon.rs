@@ -391,6 +391,9 @@ pub fn run(
     let (mut nobody, mut failure) = (0usize, None::<anyhow::Error>);
     let template = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
     let mut body_size = None;
+    // Frames whose garment failed, and the last message printed (a failure that repeats every
+    // frame is printed once).
+    let (mut garment_failures, mut last_failure) = (0usize, String::new());
     let input_owned = input.to_owned();
     let summary = runner::run(
         move || {
@@ -410,7 +413,13 @@ pub fn run(
                 body_size.get_or_insert(size);
             }
             if let Some(e) = &output.cloth_error {
-                bar.println(format!("frame {}: garment: {e}", output.index));
+                garment_failures += 1;
+                if *e != last_failure {
+                    // To stderr around the bar: `ProgressBar::println` prints nothing when the
+                    // bar is hidden (output not a terminal), and the error would be lost.
+                    bar.suspend(|| eprintln!("frame {}: garment: {e}", output.index));
+                    last_failure.clone_from(e);
+                }
             }
             let result = take
                 .push(&output.pose.frame)
@@ -436,6 +445,11 @@ pub fn run(
             size.height_cm(&template),
             size.height_scale,
             size.girth
+        );
+    }
+    if garment_failures > 0 {
+        eprintln!(
+            "no garment on {garment_failures} frames: it could not be simulated (the messages above; frames.csv marks them \"off\")"
         );
     }
     println!(

@@ -724,13 +724,16 @@ fn build_bodice(
     let mut strap_ids: Vec<Vec<Option<u32>>> = Vec::with_capacity(strap_columns.len());
     for (s, &k) in strap_columns.iter().enumerate() {
         let points = resample(&paths[s], segments);
+        // The two columns beside each armhole are never cut: where the shoulders are narrow for
+        // the neck, an opening reaching them would run into the armhole (one hole, no sleeve).
+        let beside_armhole = s < 2 || s + 2 >= strap_columns.len();
         let mut ids = Vec::with_capacity(segments + 1);
         for (j, p) in points.iter().enumerate() {
             ids.push(if j == 0 {
                 grid[top][k]
             } else if j == segments {
                 grid[top][n - k]
-            } else if in_neck_opening(*p) {
+            } else if !beside_armhole && in_neck_opening(*p) {
                 None
             } else {
                 Some(b.vertex(*p))
@@ -1645,6 +1648,41 @@ pub(crate) mod tests {
                     let expected = if kind == GarmentKind::Skirt { 2 } else { 4 };
                     assert_eq!(loops, expected, "{} {kind:?}", subject.name);
                     assert!(!mesh.anchors.is_empty(), "{} {kind:?}", subject.name);
+                }
+            }
+        }
+    }
+
+    /// The sizes `suitcap run` and `live` measure a person at (any height and girth the body-size
+    /// estimate may report, on the suit's skeleton) all get every garment, whole: with the crew
+    /// neck cut as far as the neck asked, narrow shoulders let the opening run into an armhole
+    /// (seen on the walk 02_01 test sequence, measured at 0.95 × the skeleton, girth 1.0: no
+    /// T-shirt for the whole take).
+    #[test]
+    fn every_measured_body_size_gets_every_garment() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default/skeleton.bvh");
+        let template = crate::bvh::Motion::load(&path).expect("skeleton").skeleton;
+        for height_scale in [0.85f32, 0.9, 0.95, 1.0, 1.05, 1.1, 1.15, 1.2] {
+            for girth in (0..=12).map(|k| 0.8 + 0.05 * k as f32) {
+                let size = crate::body_size::BodySize {
+                    height_scale,
+                    girth,
+                    frames: 10,
+                };
+                let (subject, skeleton) = size.subject(&template);
+                let body = crate::body::Body::new(&subject, &skeleton).expect("body");
+                let rig = BodyRig::new(skeleton, body, DEFAULT_MARGIN_CM);
+                for params in [GarmentParams::live(), GarmentParams::quality()] {
+                    for kind in GarmentKind::ALL {
+                        let case =
+                            format!("{height_scale} × {girth}, {} cm {kind:?}", params.edge_cm);
+                        let mesh = GarmentMesh::generate(kind, &rig, &params)
+                            .unwrap_or_else(|e| panic!("{case}: {e}"));
+                        let loops = boundary_loops(&mesh.triangles).len();
+                        let expected = if kind == GarmentKind::Skirt { 2 } else { 4 };
+                        assert_eq!(loops, expected, "{case}");
+                        assert!(!mesh.anchors.is_empty(), "{case}");
+                    }
                 }
             }
         }
