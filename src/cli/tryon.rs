@@ -307,6 +307,25 @@ impl RunOutputs {
     }
 }
 
+/// The frames whose garment could not be simulated: each distinct message is printed once (a
+/// failure repeats every frame), the frames are counted.
+#[derive(Default)]
+struct GarmentFailures {
+    last: String,
+    frames: usize,
+}
+
+impl GarmentFailures {
+    /// Counts frame `index`'s failure; the line to print when its message is not the last one's.
+    fn note(&mut self, index: u64, error: &str) -> Option<String> {
+        self.frames += 1;
+        (error != self.last).then(|| {
+            self.last = error.to_owned();
+            format!("frame {index}: garment: {error}")
+        })
+    }
+}
+
 fn status_name(status: &ClothStatus) -> &'static str {
     match status {
         ClothStatus::Worn { .. } => "worn",
@@ -391,9 +410,7 @@ pub fn run(
     let (mut nobody, mut failure) = (0usize, None::<anyhow::Error>);
     let template = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
     let mut body_size = None;
-    // Frames whose garment failed, and the last message printed (a failure that repeats every
-    // frame is printed once).
-    let (mut garment_failures, mut last_failure) = (0usize, String::new());
+    let mut garment_failures = GarmentFailures::default();
     let input_owned = input.to_owned();
     let summary = runner::run(
         move || {
@@ -412,14 +429,14 @@ pub fn run(
             if let ClothStatus::Worn { size } = output.cloth.status {
                 body_size.get_or_insert(size);
             }
-            if let Some(e) = &output.cloth_error {
-                garment_failures += 1;
-                if *e != last_failure {
-                    // To stderr around the bar: `ProgressBar::println` prints nothing when the
-                    // bar is hidden (output not a terminal), and the error would be lost.
-                    bar.suspend(|| eprintln!("frame {}: garment: {e}", output.index));
-                    last_failure.clone_from(e);
-                }
+            if let Some(line) = output
+                .cloth_error
+                .as_deref()
+                .and_then(|e| garment_failures.note(output.index, e))
+            {
+                // To stderr around the bar: `ProgressBar::println` prints nothing when the bar
+                // is hidden (output not a terminal), and the error would be lost.
+                bar.suspend(|| eprintln!("{line}"));
             }
             let result = take
                 .push(&output.pose.frame)
@@ -447,9 +464,10 @@ pub fn run(
             size.girth
         );
     }
-    if garment_failures > 0 {
+    if garment_failures.frames > 0 {
         eprintln!(
-            "no garment on {garment_failures} frames: it could not be simulated (the messages above; frames.csv marks them \"off\")"
+            "no garment on {} frames: it could not be simulated (the messages above; frames.csv marks them \"off\")",
+            garment_failures.frames
         );
     }
     println!(
@@ -805,6 +823,7 @@ pub fn live(
         GarmentChoice::Procedural(suitcap::cloth::garment::GarmentKind::TShirt),
     );
     let mut failure: Option<anyhow::Error> = None;
+    let mut garment_failures = GarmentFailures::default();
     let device_owned = device.to_owned();
     println!("keys: G garment · M mask · K markers · S skeleton · T timings · R record on/off · Esc/Q quit");
     let summary = runner::run(
@@ -834,6 +853,13 @@ pub fn live(
         },
         |output| {
             timings.push(output.times);
+            if let Some(line) = output
+                .cloth_error
+                .as_deref()
+                .and_then(|e| garment_failures.note(output.index, e))
+            {
+                eprintln!("{line}");
+            }
             if let Some(take) = &mut recording {
                 if let Err(e) = take.push(&output.pose.frame) {
                     failure = Some(e);
@@ -956,4 +982,23 @@ pub fn load_frames(dir: &Path) -> anyhow::Result<Vec<RgbImage>> {
         frames.push(frame.image);
     }
     Ok(frames)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_repeated_garment_failure_is_printed_once_and_every_frame_counted() {
+        let mut failures = GarmentFailures::default();
+        let a = "garment 'tshirt': no armhole found on the rShldr side";
+        assert_eq!(
+            failures.note(9, a).as_deref(),
+            Some("frame 9: garment: garment 'tshirt': no armhole found on the rShldr side")
+        );
+        assert_eq!(failures.note(10, a), None);
+        assert!(failures.note(11, "other").is_some());
+        assert!(failures.note(12, a).is_some());
+        assert_eq!(failures.frames, 4);
+    }
 }
