@@ -1250,7 +1250,6 @@ fn tshirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentErr
             reach_cm: SLEEVE_CUFF_REACH_CM,
         }));
     }
-    let _ = bodice.grid.len();
     Ok(finish(rest, "tshirt", b, anchors, cuffs, params.ease_cm))
 }
 
