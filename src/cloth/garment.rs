@@ -1655,8 +1655,8 @@ pub(crate) mod tests {
     /// The sizes `suitcap run` and `live` measure a person at (any height and girth the body-size
     /// estimate may report, on the suit's skeleton) all get every garment, whole: with the crew
     /// neck cut as far as the neck asked, narrow shoulders let the opening run into an armhole
-    /// (seen on the walk 02_01 test sequence, measured at 0.95 × the skeleton, girth 1.0: no
-    /// T-shirt for the whole take).
+    /// (seen in `suitcap run` on the walk 02_01 test sequence, measured at 1.2 × the skeleton,
+    /// girth 0.85: no T-shirt for the whole take).
     #[test]
     fn every_measured_body_size_gets_every_garment() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default/skeleton.bvh");

@@ -73,7 +73,7 @@
 //!      square root and division of the one before, and the sweeps took two thirds of the frame;
 //!      interleaved, the processor overlaps them and a frame takes about half the time. Runs of
 //!      eight such vertex-disjoint neighbours are then projected at once, one per SIMD lane
-//!      ([`stretch`](super::stretch); the positions are bit-identical to projecting them one by
+//!      ([`super::stretch`]; the positions are bit-identical to projecting them one by
 //!      one): with that, the SIMD box test in the collisions and the strain limit's SIMD scan,
 //!      the eight cases of `cargo bench --bench cloth` ran at 1.43× the frame rate (summed;
 //!      alternated runs of both builds on 2026-12-02, two each; 1.31× with blocks of four).

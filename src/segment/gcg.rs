@@ -1,12 +1,12 @@
 //! Reading and writing grid graphs in the GCG1 binary format, and min-cut labellings in `.labels`.
 //!
-//! GCG1 (little-endian, no padding): magic `GCG1`; u32 H (rows); u32 W (columns); f32[H*W] src;
-//! f32[H*W] sink; f32[H*(W-1)] right; f32[(H-1)*W] down; the file is exactly
+//! GCG1 (little-endian, no padding): magic `GCG1`; u32 H (rows); u32 W (columns); `f32[H*W]` src;
+//! `f32[H*W]` sink; `f32[H*(W-1)]` right; `f32[(H-1)*W]` down; the file is exactly
 //! 12 + 4*(2HW + H(W-1) + (H-1)W) bytes. `.labels`: H*W bytes, row-major, 1 = source side.
 //!
 //! This is how the segmenter's graphs are dumped for offline checks and how reference graphs and
 //! reference cuts (from the outside oracle) are loaded: it gives a validated
-//! [`GridGraph`](super::maxflow::GridGraph) to the max-flow solver, or a `Vec<bool>` labelling
+//! [`super::maxflow::GridGraph`] to the max-flow solver, or a `Vec<bool>` labelling
 //! (`true` = source side) to compare its result with. Every error names the file and what is wrong.
 
 use std::path::{Path, PathBuf};

@@ -6,8 +6,8 @@
 //! s-t minimum cut, then keeps one person region. [`features`] quantises pixels, [`tables`] learns and
 //! stores the likelihoods, [`train`] fits them to frames with masks, [`segmenter`] runs them per frame
 //! on [`maxflow`] (a grid max-flow written for this) and [`cleanup`]; [`gcg`] reads and writes frame
-//! graphs in the GCG1 format of the reference solver (`../shared/peers/maxflow/`). The [`Mask`]
-//! (crate::mask::Mask) it returns goes to marker detection.
+//! graphs in the GCG1 format of the reference solver (`../shared/peers/maxflow/`). The
+//! [`Mask`](crate::mask::Mask) it returns goes to marker detection.
 
 pub mod cleanup;
 pub mod features;

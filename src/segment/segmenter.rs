@@ -71,7 +71,8 @@ pub struct SegmenterOptions {
     /// hand or a shoe is 2–5 % of it. Pale or skin-coloured background beside the legs or the
     /// trunk (the pith of an orange, cat fur) joins as larger ragged pieces: at 10 % they were kept
     /// (pose test sequences 0.894, 0.922, 0.937, 0.809, 0.806, 0.918 IoU against 0.903, 0.922,
-    /// 0.940, 0.840, 0.811, 0.928 at 5 %).
+    /// 0.940, 0.840, 0.811, 0.928 at 5 % for every piece, 0.909, 0.922, 0.944, 0.839, 0.811, 0.928
+    /// with [`SegmenterOptions::part_max_top_share`] beside it).
     pub part_max_share: f32,
     /// The largest piece that reaches as high as the suit's top row or higher (see
     /// [`PartLimits::max_top_area`]): a head, about 6 % of the suit's area seen from the front,

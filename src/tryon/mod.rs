@@ -155,7 +155,8 @@ pub enum ClothStatus {
     Worn { size: BodySize },
     /// Nobody in view: hidden.
     NoPerson,
-    /// No garment was asked for.
+    /// No garment was asked for, or it could not be simulated (the runner's output carries the
+    /// error).
     Off,
 }
 
