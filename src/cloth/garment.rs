@@ -1639,15 +1639,23 @@ pub(crate) mod tests {
             let subject = crate::body::Subject::find(&index.to_string()).expect("subject");
             let rig =
                 BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig");
-            for params in [GarmentParams::live(), GarmentParams::quality()] {
-                for kind in GarmentKind::ALL {
-                    let mesh = GarmentMesh::generate(kind, &rig, &params)
-                        .unwrap_or_else(|e| panic!("{} {kind:?}: {e}", subject.name));
-                    let loops = boundary_loops(&mesh.triangles).len();
-                    let expected = if kind == GarmentKind::Skirt { 2 } else { 4 };
-                    assert_eq!(loops, expected, "{} {kind:?}", subject.name);
-                    assert!(!mesh.anchors.is_empty(), "{} {kind:?}", subject.name);
-                }
+            assert_every_garment_is_whole(&rig, subject.name);
+        }
+    }
+
+    /// Every garment of both modes is made for `rig`, whole (the skirt's waist and hem; the
+    /// T-shirt's and the dress's neck, hem and two arm openings as boundary loops) and anchored;
+    /// `case` names the rig in a failure.
+    fn assert_every_garment_is_whole(rig: &BodyRig, case: &str) {
+        for params in [GarmentParams::live(), GarmentParams::quality()] {
+            for kind in GarmentKind::ALL {
+                let case = format!("{case}, {} cm {kind:?}", params.edge_cm);
+                let mesh = GarmentMesh::generate(kind, rig, &params)
+                    .unwrap_or_else(|e| panic!("{case}: {e}"));
+                let loops = boundary_loops(&mesh.triangles).len();
+                let expected = if kind == GarmentKind::Skirt { 2 } else { 4 };
+                assert_eq!(loops, expected, "{case}");
+                assert!(!mesh.anchors.is_empty(), "{case}");
             }
         }
     }
@@ -1671,18 +1679,7 @@ pub(crate) mod tests {
                 let (subject, skeleton) = size.subject(&template);
                 let body = crate::body::Body::new(&subject, &skeleton).expect("body");
                 let rig = BodyRig::new(skeleton, body, DEFAULT_MARGIN_CM);
-                for params in [GarmentParams::live(), GarmentParams::quality()] {
-                    for kind in GarmentKind::ALL {
-                        let case =
-                            format!("{height_scale} × {girth}, {} cm {kind:?}", params.edge_cm);
-                        let mesh = GarmentMesh::generate(kind, &rig, &params)
-                            .unwrap_or_else(|e| panic!("{case}: {e}"));
-                        let loops = boundary_loops(&mesh.triangles).len();
-                        let expected = if kind == GarmentKind::Skirt { 2 } else { 4 };
-                        assert_eq!(loops, expected, "{case}");
-                        assert!(!mesh.anchors.is_empty(), "{case}");
-                    }
-                }
+                assert_every_garment_is_whole(&rig, &format!("{height_scale} × {girth}"));
             }
         }
     }
