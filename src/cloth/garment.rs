@@ -1261,7 +1261,7 @@ fn tshirt(rest: &Rest, params: &GarmentParams) -> Result<GarmentMesh, GarmentErr
 /// 2.24 %, 20° 1.99 / 2.08 %, 30° 1.57 / 1.85 %;
 /// with rings one edge apart along the slant (as now) 24° 1.47 / 1.62 %, 30° 1.56 / 1.87 %, 36°
 /// 1.36 / 1.41 % but an edge of the walk's at 11.1 %. 24° is the smallest flare tried that meets
-/// the targets on both (and on the README's three held-out clips, checked afterwards).
+/// the targets on both (and on the three held-out clips of docs/measurements.md, checked afterwards).
 pub const SKIRT_FLARE_DEG: f32 = 24.0;
 /// The dress's skirt flares less (an A-line): it hangs from a waist that follows the hip loosely,
 /// and meets the strain targets as it is.

@@ -117,8 +117,8 @@
 //!      tore armpit edges to 244 % (the dressed first frame of the quick start's kick) and 583 %
 //!      (walk 02_01), and the live T-shirt on CMU 05_12's dance to 135–271 %, where no strain
 //!      limit could help, the collisions undoing it every round. (A fade over 1 cm instead of 2 cm
-//!      left the kick's 4,000-vertex T-shirt at 10.6 %.) The README's try-on section has the
-//!      figures;
+//!      left the kick's 4,000-vertex T-shirt at 10.6 %.) The try-on part of
+//!      docs/measurements.md has the figures;
 //!    - **strain limit** (Provot 1995, "Deformation constraints in a mass-spring model to describe
 //!      rigid cloth behavior"): the edges still more than `strain_limit` (9 %) longer or shorter
 //!      than at rest are found, projected back onto that bound four times, a vertex in contact

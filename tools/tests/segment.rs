@@ -74,7 +74,7 @@ fn trained_on_one_sequence_it_segments_another() {
         .map(|f| segmenter.segment(&f.image).mask.iou(&f.mask))
         .collect();
     let mean = ious.iter().sum::<f64>() / ious.len() as f64;
-    // Measured 0.85 when written (README, performance table); the bound leaves room for noise.
+    // Measured 0.85 when written (docs/measurements.md, performance history); the bound leaves room for noise.
     assert!(mean > 0.75, "mean IoU {mean:.3} over {ious:?}");
 
     // The same room without the person: an empty mask.
