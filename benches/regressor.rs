@@ -79,23 +79,25 @@ fn bench(c: &mut Criterion) {
         frames.descriptors.len()
     );
     let mut pose = vec![0.0; regressor.rvm.outputs];
-    let mut group = c.benchmark_group("regressor");
+    // The next frame's descriptor regressed into `pose`; its index.
     let mut k = 0;
+    let mut regress_next = |pose: &mut [f32]| {
+        k = (k + 1) % frames.descriptors.len();
+        regressor
+            .rvm
+            .predict_into(black_box(&frames.descriptors[k]), pose);
+        k
+    };
+    let mut group = c.benchmark_group("regressor");
     group.bench_function("predict", |b| {
         b.iter(|| {
-            k = (k + 1) % frames.descriptors.len();
-            regressor
-                .rvm
-                .predict_into(black_box(&frames.descriptors[k]), &mut pose);
+            regress_next(&mut pose);
             black_box(&pose);
         })
     });
     group.bench_function("predict + decode", |b| {
         b.iter(|| {
-            k = (k + 1) % frames.descriptors.len();
-            regressor
-                .rvm
-                .predict_into(black_box(&frames.descriptors[k]), &mut pose);
+            let k = regress_next(&mut pose);
             black_box(regressor.layout.decode(
                 &regressor.skeleton.skeleton,
                 &pose,

@@ -59,6 +59,8 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
 
+use crate::stats::squared_distance;
+
 /// Smallest prior precision α.
 pub const ALPHA_MIN: f64 = 1e-12;
 /// Largest prior precision α (a basis at this value is effectively pruned).
@@ -196,29 +198,6 @@ fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
     for (yi, xi) in y.iter_mut().zip(x) {
         *yi += a * xi;
     }
-}
-
-/// Squared Euclidean distance of two `f32` rows (eight partial sums).
-#[inline]
-fn sqdist32(a: &[f32], b: &[f32]) -> f32 {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0f32; 8];
-    let ca = a.chunks_exact(8);
-    let cb = b.chunks_exact(8);
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for k in 0..8 {
-            let d = x[k] - y[k];
-            acc[k] += d * d;
-        }
-    }
-    let mut s = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
-    for (x, y) in ra.iter().zip(rb) {
-        let d = x - y;
-        s += d * d;
-    }
-    s
 }
 
 /// Lower Cholesky factor of the symmetric `m × m` row-major `a` (only the lower
@@ -373,7 +352,7 @@ fn chol_append(l: &[f64], m: usize, h: &[f64]) -> Option<Vec<f64>> {
 fn nearest_centre(row: &[f32], centres: &[f32], dim: usize, k: usize) -> (usize, f32) {
     let mut best = (0usize, f32::INFINITY);
     for c in 0..k {
-        let d = sqdist32(row, &centres[c * dim..(c + 1) * dim]);
+        let d = squared_distance(row, &centres[c * dim..(c + 1) * dim]);
         if d < best.1 {
             best = (c, d);
         }
@@ -406,7 +385,7 @@ pub fn candidate_centres(x: &[f32], n: usize, dim: usize, s: usize, seed: u64) -
     centres.extend_from_slice(row(first));
     let mut d2: Vec<f64> = (0..n)
         .into_par_iter()
-        .map(|i| sqdist32(row(i), row(first)) as f64)
+        .map(|i| squared_distance(row(i), row(first)) as f64)
         .collect();
     let mut k = 1;
     while k < s {
@@ -429,7 +408,7 @@ pub fn candidate_centres(x: &[f32], n: usize, dim: usize, s: usize, seed: u64) -
         let c = row(pick).to_vec();
         centres.extend_from_slice(&c);
         d2.par_iter_mut().enumerate().for_each(|(i, d)| {
-            let e = sqdist32(row(i), &c) as f64;
+            let e = squared_distance(row(i), &c) as f64;
             if e < *d {
                 *d = e;
             }
@@ -506,7 +485,7 @@ pub fn median_distance(x: &[f32], n: usize, dim: usize, seed: u64) -> f32 {
             if j >= i {
                 j += 1;
             }
-            sqdist32(row(i), row(j)).sqrt()
+            squared_distance(row(i), row(j)).sqrt()
         })
         .collect();
     d.sort_by(|a, b| a.total_cmp(b));
@@ -1022,7 +1001,7 @@ impl Rvm {
             } else {
                 let centre = &x[candidates[c] * dim..(candidates[c] + 1) * dim];
                 for (i, e) in col.iter_mut().enumerate() {
-                    let d2 = sqdist32(&x[i * dim..(i + 1) * dim], centre) as f64;
+                    let d2 = squared_distance(&x[i * dim..(i + 1) * dim], centre) as f64;
                     *e = (-d2 * g).exp();
                 }
             }
@@ -1222,7 +1201,7 @@ impl Rvm {
         out.copy_from_slice(&self.weights[r * v..(r + 1) * v]);
         let g = 1.0 / (2.0 * self.width * self.width);
         for j in 0..r {
-            let d2 = sqdist32(x, &self.relevance_vectors[j * self.dim..(j + 1) * self.dim]);
+            let d2 = squared_distance(x, &self.relevance_vectors[j * self.dim..(j + 1) * self.dim]);
             let k = (-d2 * g).exp();
             if k == 0.0 {
                 continue;
