@@ -14,7 +14,7 @@
 //!
 //! Training spends nearly all its time in k-means' distances (the FC codebook's: 20,000 histograms
 //! of 180 bins against 200 centres, 40 rounds). linfa's default Euclidean distance sums the squares
-//! one after the other through `ndarray-stats`, which no compiler may vectorise; [`SquaredEuclidean`]
+//! one after the other through `ndarray-stats`, which no compiler may vectorise; [`KMeansL2`]
 //! gives linfa [`crate::stats::squared_distance`] instead (eight partial sums, as the RVM's kernel
 //! uses), so the codebooks differ from the default distance's in the last bits of the sums.
 
@@ -201,7 +201,7 @@ impl Codebook {
             }
         })?;
         let dataset = DatasetBase::from(array);
-        let model = KMeans::params_with(k, rng, SquaredEuclidean)
+        let model = KMeans::params_with(k, rng, KMeansL2)
             .n_runs(1)
             .max_n_iterations(40)
             .tolerance(1e-4)
@@ -235,9 +235,9 @@ impl Codebook {
 /// Euclidean distance for linfa's k-means over the rows' contiguous slices, with
 /// [`squared_distance`]'s eight partial sums (linfa's `L2Dist` sums one square after the other).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct SquaredEuclidean;
+pub struct KMeansL2;
 
-impl Distance<f32> for SquaredEuclidean {
+impl Distance<f32> for KMeansL2 {
     fn distance<D: Dimension>(&self, a: ArrayView<f32, D>, b: ArrayView<f32, D>) -> f32 {
         self.rdistance(a, b).sqrt()
     }
@@ -278,11 +278,11 @@ mod tests {
         use linfa_nn::distance::L2Dist;
         let rows = ndarray::array![[3.0f32, 0.0, 1.0], [0.0, 4.0, 1.0]];
         let (a, b) = (rows.row(0), rows.row(1));
-        assert_eq!(SquaredEuclidean.rdistance(a, b), 25.0);
-        assert_eq!(SquaredEuclidean.distance(a, b), 5.0);
+        assert_eq!(KMeansL2.rdistance(a, b), 25.0);
+        assert_eq!(KMeansL2.distance(a, b), 5.0);
         // Columns are strided views: the fallback sum gives the same.
         let (c0, c1) = (rows.column(0), rows.column(1));
-        assert_eq!(SquaredEuclidean.rdistance(c0, c1), 9.0 + 16.0);
+        assert_eq!(KMeansL2.rdistance(c0, c1), 9.0 + 16.0);
         // Against linfa's own distance on a histogram-sized row (eight-lane sums differ only in
         // rounding).
         let long: Vec<f32> = (0..180).map(|i| ((i * 37) % 11) as f32 / 11.0).collect();
@@ -291,11 +291,11 @@ mod tests {
             ndarray::ArrayView1::from(&long[..]),
             ndarray::ArrayView1::from(&other[..]),
         );
-        let ours = SquaredEuclidean.rdistance(x, y);
+        let ours = KMeansL2.rdistance(x, y);
         let linfas = L2Dist.rdistance(x, y);
         assert!((ours - linfas).abs() <= 1e-5 * linfas, "{ours} vs {linfas}");
-        assert_eq!(SquaredEuclidean.rdist_to_dist(25.0), 5.0);
-        assert_eq!(SquaredEuclidean.dist_to_rdist(5.0), 25.0);
+        assert_eq!(KMeansL2.rdist_to_dist(25.0), 5.0);
+        assert_eq!(KMeansL2.dist_to_rdist(5.0), 25.0);
     }
 
     fn grid_codebook() -> Codebook {
