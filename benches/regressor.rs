@@ -31,12 +31,11 @@ struct Frames {
     boxes: Vec<(f32, f32, f32, f32)>,
 }
 
-fn describe_demo(suit_dir: &Path, regressor: &Regressor) -> Frames {
+fn describe_demo(suit_dir: &Path, suit: &SuitDefinition, regressor: &Regressor) -> Frames {
     let clip = suit_dir.join("demo/640x480");
-    let suit = SuitDefinition::load_dir(suit_dir).expect("the default suit");
     let mut segmenter = PosePipeline::load_segmenter(suit_dir).expect("the default segmenter");
     let codebooks = Codebooks::load(suit_dir).expect("the default codebooks");
-    let mut describer = Describer::new(&suit);
+    let mut describer = Describer::new(suit);
     let mut names: Vec<_> = std::fs::read_dir(clip.join("frames"))
         .expect("the demo frames")
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -70,7 +69,7 @@ fn bench(c: &mut Criterion) {
     let regressor = Regressor::load(&suit_dir, &suit).expect("the default regressor");
     let camera =
         Camera::load(&suit_dir.join("demo/640x480/camera.toml")).expect("the demo's camera");
-    let frames = describe_demo(&suit_dir, &regressor);
+    let frames = describe_demo(&suit_dir, &suit, &regressor);
     eprintln!(
         "regressor: {} relevance vectors of {} values, {} outputs; {} demo frames described",
         regressor.rvm.len(),

@@ -18,7 +18,6 @@ use suitcap::mask::Mask;
 use suitcap::segment::{Segmenter, SegmenterOptions, SegmenterTables, StageTimes};
 use suitcap::source::directory::list_frame_files;
 use suitcap::source::{open_source, SourceError, SourceOptions};
-use suitcap::stats::median;
 use suitcap::suit::SuitDefinition;
 
 mod cli;
@@ -469,9 +468,8 @@ fn segment(
          {removed_px} stray person pixels removed, {filled_px} hole pixels filled (at the cut's resolution)"
     );
     if !times.is_empty() {
-        let stage_median = |f: &dyn Fn(&StageTimes) -> f64| {
-            median(&times.iter().map(f).collect::<Vec<_>>()).unwrap_or(0.0)
-        };
+        let stage_median =
+            |f: &dyn Fn(&StageTimes) -> f64| cli::median(&times.iter().map(f).collect::<Vec<_>>());
         println!(
             "median ms per frame: features {:.2}, graph {:.2}, cut {:.2}, clean-up {:.2}, refine {:.2}, history {:.2}, total {:.2}",
             stage_median(&|t| t.features),
@@ -610,7 +608,7 @@ fn describe(
         suitcap::io::write_atomic(path, marker_rows.as_bytes())
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    let median = median(&times).unwrap_or(0.0);
+    let median = cli::median(&times);
     let mean_markers = counts.iter().sum::<usize>() as f64 / counts.len().max(1) as f64;
     println!("{frames} {} descriptors ({} values) written to {}; median {median:.2} ms per frame, {mean_markers:.0} markers per frame; {} corrupt frames skipped", kind.name(), kind.len(), out.display(), skipped.len());
     if truth.is_some() {
