@@ -85,15 +85,24 @@ impl Mask {
     /// Bounding box of the person pixels: (x0, y0, x1, y1) with x1, y1 exclusive.
     pub fn bounding_box(&self) -> Option<(u32, u32, u32, u32)> {
         let w = self.width as usize;
-        let mut bounds: Option<(u32, u32, u32, u32)> = None;
-        for (i, _) in self.pixels.iter().enumerate().filter(|(_, &p)| p) {
-            let (x, y) = ((i % w) as u32, (i / w) as u32);
+        if w == 0 {
+            return None;
+        }
+        let mut bounds: Option<(usize, usize, usize, usize)> = None;
+        for (y, row) in self.pixels.chunks_exact(w).enumerate() {
+            // Whether the row has a person pixel, without an early exit (so it runs in vector
+            // lanes; most rows of a frame have none); then where they start and end.
+            if !row.iter().fold(false, |any, &p| any | p) {
+                continue;
+            }
+            let first = row.iter().position(|&p| p).unwrap_or(0);
+            let last = row.iter().rposition(|&p| p).unwrap_or(0);
             bounds = Some(match bounds {
-                None => (x, y, x + 1, y + 1),
-                Some((x0, y0, x1, y1)) => (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1)),
+                None => (first, y, last + 1, y + 1),
+                Some((x0, y0, x1, _)) => (x0.min(first), y0, x1.max(last + 1), y + 1),
             });
         }
-        bounds
+        bounds.map(|(x0, y0, x1, y1)| (x0 as u32, y0 as u32, x1 as u32, y1 as u32))
     }
 
     /// Intersection over union with `other` (same size); 1 when both are empty.
@@ -162,6 +171,9 @@ mod tests {
         assert_eq!(Mask::empty(4, 4).iou(&Mask::empty(4, 4)), 1.0);
         assert_eq!(a.bounding_box(), Some((0, 0, 2, 4)));
         assert_eq!(Mask::empty(4, 4).bounding_box(), None);
+        // Two pixels, (2, 1) and (0, 3): the box spans columns 0–2 and rows 1–3.
+        let two = Mask::from_pixels(4, 4, (0..16).map(|i| i == 6 || i == 12).collect());
+        assert_eq!(two.expect("size").bounding_box(), Some((0, 1, 3, 4)));
     }
 
     #[test]

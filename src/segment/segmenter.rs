@@ -23,7 +23,8 @@
 //!    [`SegmenterOptions::part_max_top_share`], [`SegmenterOptions::part_max_round_share`],
 //!    [`SegmenterOptions::part_min_depth`]);
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
-//!    their own colour and the upsampled cut.
+//!    their own colour and the upsampled cut; then moves the outline onto the frame's colour edge
+//!    ([`snap`](super::snap); its time is counted in the refinement's).
 //!
 //! A frame with nobody in it gives an empty mask. The mask goes to marker detection and the descriptors.
 
@@ -40,6 +41,7 @@ use super::features::{
     ColourLut, FrameFeatures, MarkerGate, COLOUR_BINS, PATTERN_CLASSES, TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
+use super::snap::snap_to_colour_edges;
 use super::tables::SegmenterTables;
 use crate::mask::Mask;
 use crate::suit::SuitDefinition;
@@ -55,6 +57,10 @@ pub struct SegmenterOptions {
     pub refine_prior: f32,
     /// Widen the boundary band to the cells next to a label change, not only those across it.
     pub refine_wide: bool,
+    /// Passes of the edge snapping after the refinement (0: none; see [`snap`](super::snap)).
+    pub snap_passes: u32,
+    /// How far (pixels, chessboard) the edge snapping looks for the colours of both sides.
+    pub snap_radius: u32,
     /// Share of the online background histogram that each new frame replaces (0 = no adaptation).
     pub adapt_rate: f32,
     /// Background pixels closer than this to the person (at the cut's resolution) are not learned.
@@ -94,6 +100,8 @@ impl Default for SegmenterOptions {
             max_hole_fraction: 0.001,
             refine_prior: 3.0,
             refine_wide: true,
+            snap_passes: 2,
+            snap_radius: 3,
             adapt_rate: 0.3,
             adapt_margin: 4,
             adapt_share: 0.7,
@@ -586,7 +594,14 @@ impl Segmenter {
         times.cleanup = ms(started);
 
         let started = Instant::now();
-        let mask = self.refine(frame, &person, w, h);
+        let mut mask = self.refine(frame, &person, w, h);
+        snap_to_colour_edges(
+            frame,
+            &mut mask,
+            self.options.snap_radius,
+            self.options.snap_passes,
+            |rgb| self.gate.is_marker(self.lut.get(rgb)),
+        );
         times.refine = ms(started);
 
         // History for the next frame.
