@@ -49,7 +49,7 @@ pub fn snap_to_colour_edges(
     };
     // Each pass moves the outline by a pixel at most, so every outline pixel and every sample
     // it reads lie within the person's box grown by `passes + radius`; the work is done on a
-    // copy of that region (colours and labels), written back at the end.
+    // copy of that region's labels, written back at the end.
     let grow = (radius + passes) as usize;
     let (rx0, ry0) = (
         (x0 as usize).saturating_sub(grow),
