@@ -84,25 +84,8 @@ impl Mask {
 
     /// Bounding box of the person pixels: (x0, y0, x1, y1) with x1, y1 exclusive.
     pub fn bounding_box(&self) -> Option<(u32, u32, u32, u32)> {
-        let w = self.width as usize;
-        if w == 0 {
-            return None;
-        }
-        let mut bounds: Option<(usize, usize, usize, usize)> = None;
-        for (y, row) in self.pixels.chunks_exact(w).enumerate() {
-            // Whether the row has a person pixel, without an early exit (so it runs in vector
-            // lanes; most rows of a frame have none); then where they start and end.
-            if !row.iter().fold(false, |any, &p| any | p) {
-                continue;
-            }
-            let first = row.iter().position(|&p| p).unwrap_or(0);
-            let last = row.iter().rposition(|&p| p).unwrap_or(0);
-            bounds = Some(match bounds {
-                None => (first, y, last + 1, y + 1),
-                Some((x0, y0, x1, _)) => (x0.min(first), y0, x1.max(last + 1), y + 1),
-            });
-        }
-        bounds.map(|(x0, y0, x1, y1)| (x0 as u32, y0 as u32, x1 as u32, y1 as u32))
+        bounding_box_of(&self.pixels, self.width as usize)
+            .map(|(x0, y0, x1, y1)| (x0 as u32, y0 as u32, x1 as u32, y1 as u32))
     }
 
     /// Intersection over union with `other` (same size); 1 when both are empty.
@@ -120,6 +103,26 @@ impl Mask {
         }
         counts
     }
+}
+
+/// The box around the set pixels of a row-major grid `width` wide: (x0, y0, x1, y1) with x1, y1
+/// exclusive; `None` when no pixel is set. The first and last rows with a set pixel are found from
+/// either end, then only the rows between them are scanned for their first and last set column.
+pub fn bounding_box_of(pixels: &[bool], width: usize) -> Option<(usize, usize, usize, usize)> {
+    if width == 0 {
+        return None;
+    }
+    let rows = || pixels.chunks_exact(width);
+    let first = rows().position(|row| row.contains(&true))?;
+    let last = rows().rposition(|row| row.contains(&true))?;
+    let (mut x0, mut x1) = (width, 0);
+    for row in rows().skip(first).take(last + 1 - first) {
+        if let (Some(a), Some(b)) = (row.iter().position(|&p| p), row.iter().rposition(|&p| p)) {
+            x0 = x0.min(a);
+            x1 = x1.max(b + 1);
+        }
+    }
+    Some((x0, first, x1, last + 1))
 }
 
 /// How a mask agrees with the true one, in pixels.

@@ -13,6 +13,8 @@
 //! a head, a hand or a shoe ([`PartLimits`]). The person mask goes to the refinement at full
 //! resolution.
 
+use crate::mask::bounding_box_of;
+
 /// What the clean-up changed in one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CleanupReport {
@@ -193,22 +195,13 @@ impl PixelBox {
     /// The box around the set pixels of `region` (row-major, `width` × `height`), grown by `margin`
     /// on each side and clipped to the grid; `None` when no pixel is set.
     pub fn around(region: &[bool], width: usize, height: usize, margin: usize) -> Option<PixelBox> {
-        let rows = || region.chunks_exact(width.max(1)).take(height);
-        let first = rows().position(|row| row.contains(&true))?;
-        let last = height - 1 - rows().rev().position(|row| row.contains(&true))?;
-        let (mut x0, mut x1) = (width, 0);
-        for row in rows().skip(first).take(last + 1 - first) {
-            if let (Some(a), Some(b)) = (row.iter().position(|&p| p), row.iter().rposition(|&p| p))
-            {
-                x0 = x0.min(a);
-                x1 = x1.max(b);
-            }
-        }
+        let grid = &region[..(width * height).min(region.len())];
+        let (x0, y0, x1, y1) = bounding_box_of(grid, width)?;
         Some(PixelBox {
             x0: x0.saturating_sub(margin),
-            y0: first.saturating_sub(margin),
-            x1: (x1 + 1 + margin).min(width),
-            y1: (last + 1 + margin).min(height),
+            y0: y0.saturating_sub(margin),
+            x1: (x1 + margin).min(width),
+            y1: (y1 + margin).min(height),
         })
     }
 

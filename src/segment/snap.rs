@@ -27,6 +27,7 @@
 
 use image::RgbImage;
 
+use super::cleanup::PixelBox;
 use crate::mask::Mask;
 
 /// Snaps `mask`'s outline to the colour edges of `frame` (see the module documentation) in up to
@@ -44,18 +45,19 @@ pub fn snap_to_colour_edges(
     if (frame.width() as usize, frame.height() as usize) != (w, h) {
         return None;
     }
-    let Some((x0, y0, x1, y1)) = mask.bounding_box() else {
-        return Some(0);
-    };
     // Each pass moves the outline by a pixel at most, so every outline pixel and every sample
     // it reads lie within the person's box grown by `passes + radius`; the work is done on a
     // copy of that region's labels, written back at the end.
     let grow = (radius + passes) as usize;
-    let (rx0, ry0) = (
-        (x0 as usize).saturating_sub(grow),
-        (y0 as usize).saturating_sub(grow),
-    );
-    let (rx1, ry1) = ((x1 as usize + grow).min(w), (y1 as usize + grow).min(h));
+    let Some(PixelBox {
+        x0: rx0,
+        y0: ry0,
+        x1: rx1,
+        y1: ry1,
+    }) = PixelBox::around(mask.pixels(), w, h, grow)
+    else {
+        return Some(0);
+    };
     let (rw, rh) = (rx1 - rx0, ry1 - ry0);
     // The region's labels as 0 or 1; colours are read from the frame, four lanes per pixel (the
     // fourth zero) so that a distance is one vector subtraction, product and sum.
