@@ -3,7 +3,13 @@
 //! Every pixel inside the mask is classified to one of the suit's marker colours by hue (within the
 //! suit's `hue_tolerance_deg` of the colour's hue, with saturation and value above the suit's gates,
 //! so the yellowish-green cloth and dark or washed-out pixels are not markers), through one
-//! 256 KB table from the pixel's 6-bit-per-channel RGB to its label. Pixels of one colour are
+//! 256 KB table from the pixel's 6-bit-per-channel RGB to its label. Red's hue gate takes in skin:
+//! a pixel of such a colour that is as pale as skin and lies on skin's side of the colour's hue is
+//! only *weakly* of it ([`SKIN_PIXEL_MAX_SATURATION`], [`SKIN_SIDE_DEG`]). A weak pixel touching a
+//! strongly coloured one joins it (a blurred rim); the others make weak components, which are
+//! markers only if no larger than a marker's square and not on the mask's edge with their colour
+//! running on or with more border outside the mask than in it (a marker seen at a slant, all its
+//! pixels blurred pale, rather than a hand or a head). Pixels of one colour are
 //! grouped into 4-connected fragments; fragments of one colour that touch corner to corner are one
 //! component unless both are already a quarter of a marker's apparent square or more (a marker
 //! seen edge-on is a diagonal strip one pixel thick, which 4-connectivity breaks into single
@@ -95,12 +101,18 @@ pub struct MarkerDetector {
     /// Per marker colour: the least ratio of a component's brightest pixel's value to the mean
     /// value of the cloth on its border ([`MIN_VALUE_SHARE`] of the printed colours' ratio).
     min_value_ratio: Vec<f32>,
+    /// Whether some marker colour's pixels can be weak ([`SKIN_PIXEL_MAX_SATURATION`]).
+    has_weak_colours: bool,
     scratch: Scratch,
 }
 
 /// Pixel labels besides the marker colour indices (which are below all of them).
 const NONE: u8 = 0x7f;
 const CLOTH: u8 = 0x7e;
+/// Set on the label of a pixel only weakly of its marker colour ([`SKIN_PIXEL_MAX_SATURATION`]):
+/// `WEAK | k` connects to weak pixels of colour `k` only, unless [`promote_weak`] makes it `k`.
+/// Marker colour indices stay below it.
+const WEAK: u8 = 0x40;
 /// Set on the label of a pixel outside the mask (whose colour is still looked at).
 const OUTSIDE: u8 = 0x80;
 /// Pixels looked at around the mask's bounding box.
@@ -149,6 +161,18 @@ const PEAK_SATURATION_SHARE: f32 = 0.5;
 const SKIN_HUE_DEG: f32 = 20.0;
 /// Skin is at most this saturated (the six subjects' albedos: 0.27–0.50; a red marker's core 0.85).
 const SKIN_MAX_SATURATION: f32 = 0.5;
+/// A pixel of a colour whose hue gate takes in skin is only weakly of that colour below this
+/// saturation: it joins a marker where it touches one of its strongly coloured pixels (a blurred
+/// rim) and is nothing otherwise ([`promote_weak`]). Rendered skin under the generator's light
+/// and shading reaches 0.58 (99th percentile of the pixels within ±40° of red, away from every
+/// marker, on the nine sequences of `scripts/eval_markers.sh` and the four fresh ones), a red
+/// marker's centre 0.59–0.69 (1st percentile) and 0.85 typically. Without it, a hand or a head
+/// beside a red marker was one component with it, too big or centred off the marker.
+const SKIN_PIXEL_MAX_SATURATION: f32 = 0.6;
+/// How far from its colour's hue, towards skin's, a pale pixel must lie to be weak: a red marker's
+/// centre lies within 9.4° of red (95th percentile; 12.6° on the worst sequence), skin at 11° and
+/// more (5th percentile). 8° and 12° gave the same recall within 0.1 point.
+const SKIN_SIDE_DEG: f32 = 8.0;
 const SIDES: [(isize, isize); 4] = [(-1, 0), (1, 0), (0, -1), (0, 1)];
 const CORNERS: [(isize, isize); 4] = [(-1, -1), (1, -1), (-1, 1), (1, 1)];
 
@@ -170,6 +194,31 @@ fn is_marker_label(label: u8) -> bool {
     label < CLOTH
 }
 
+/// Promotes the weak pixels (`WEAK | k`, see [`SKIN_PIXEL_MAX_SATURATION`]) of `labels` that have a
+/// 4-neighbour strongly of their colour `k` to `k` (the `OUTSIDE` flag kept); the others stay weak
+/// and make fragments of their own. Decided from the labels as they were, so a run of weak pixels
+/// (skin touching a marker) joins the marker one pixel deep, not all of it.
+fn promote_weak(labels: &mut [u8], grid: Grid, promoted: &mut Vec<(usize, u8)>) {
+    promoted.clear();
+    for (i, &label) in labels.iter().enumerate() {
+        let base = label & !OUTSIDE;
+        if !(WEAK..CLOTH).contains(&base) {
+            continue;
+        }
+        let k = base & !WEAK;
+        let strong = |side: &(isize, isize)| {
+            grid.step(i, *side)
+                .is_some_and(|j| labels[j] & !OUTSIDE == k)
+        };
+        if SIDES.iter().any(strong) {
+            promoted.push((i, k | (label & OUTSIDE)));
+        }
+    }
+    for &(i, label) in promoted.iter() {
+        labels[i] = label;
+    }
+}
+
 /// The saturation (0–255) a component's most saturated pixel must reach to be a marker of colour
 /// `hsv`: half the printed saturation, so a marker blurred into the cloth still passes, and for a
 /// colour whose hue gate takes in skin, more than skin reaches (hands next to red markers).
@@ -179,6 +228,18 @@ fn min_peak_saturation(hsv: crate::colour::Hsv, hue_tolerance_deg: f32) -> u8 {
         min = min.max(SKIN_MAX_SATURATION);
     }
     (min * 255.0).round() as u8
+}
+
+/// Whether pixel colour `c`, inside the hue gate of marker colour `hsv`, is only weakly of it
+/// (see [`SKIN_PIXEL_MAX_SATURATION`]): the colour's hue gate takes in skin, and the pixel is less
+/// saturated than skin gets and lies [`SKIN_SIDE_DEG`] or more from the colour's hue towards skin's.
+fn is_weak(hsv: crate::colour::Hsv, hue_tolerance_deg: f32, c: PixelColour) -> bool {
+    use crate::colour::hue_distance;
+    let hue = (c.hue as f32 + 0.5) * 360.0 / 256.0;
+    hue_distance(hsv.hue, SKIN_HUE_DEG) <= hue_tolerance_deg
+        && (c.sat as f32) < SKIN_PIXEL_MAX_SATURATION * 255.0
+        && hue_distance(hue, hsv.hue) >= SKIN_SIDE_DEG
+        && hue_distance(hue, SKIN_HUE_DEG) < hue_distance(hsv.hue, SKIN_HUE_DEG)
 }
 
 impl MarkerDetector {
@@ -191,7 +252,15 @@ impl MarkerDetector {
                 let rgb = [(i >> 12) as u8, (i >> 6) as u8 & 63, i as u8 & 63].map(|c| c << 2);
                 let c = lut.get(rgb);
                 match gate.marker_index(c) {
-                    Some(k) => k.min(CLOTH as usize - 1) as u8,
+                    Some(k)
+                        if suit
+                            .markers
+                            .get(k)
+                            .is_some_and(|m| is_weak(m.hsv, gates.hue_tolerance_deg, c)) =>
+                    {
+                        WEAK | k.min(WEAK as usize - 1) as u8
+                    }
+                    Some(k) => k.min(WEAK as usize - 1) as u8,
                     None if gate.is_cloth(c) => CLOTH,
                     None => NONE,
                 }
@@ -212,6 +281,9 @@ impl MarkerDetector {
                 .iter()
                 .map(|m| MIN_VALUE_SHARE * m.hsv.value / suit.background.hsv.value.max(1e-3))
                 .collect(),
+            has_weak_colours: suit.markers.iter().any(|m| {
+                crate::colour::hue_distance(m.hsv.hue, SKIN_HUE_DEG) <= gates.hue_tolerance_deg
+            }),
             scratch: Scratch::default(),
         }
     }
@@ -222,10 +294,15 @@ impl MarkerDetector {
         self.gate.marker_index(c).map(|k| k as u8)
     }
 
+    /// The area (pixels) of a marker's square seen face-on, for a silhouette `height` pixels tall.
+    fn apparent_square(&self, height: f32) -> f32 {
+        let side = self.marker_size_cm * height / ASSUMED_HEIGHT_CM;
+        side * side
+    }
+
     /// Area bounds (pixels) of a marker for a silhouette `height` pixels tall.
     pub fn area_bounds(&self, height: f32) -> (u32, u32) {
-        let side = self.marker_size_cm * height / ASSUMED_HEIGHT_CM;
-        let square = side * side;
+        let square = self.apparent_square(height);
         (
             (0.08 * square).max(2.0) as u32,
             (4.0 * square).max(6.0) as u32,
@@ -279,12 +356,15 @@ impl MarkerDetector {
                 }
             }));
         }
+        if self.has_weak_colours {
+            promote_weak(labels, grid, &mut self.scratch.promoted);
+        }
         let lut = &self.lut;
         self.scratch.fragments(grid, |i| {
             let p = ((i / grid.width + y0 as usize) * width + i % grid.width + x0 as usize) * 3;
             lut.get([raw[p], raw[p + 1], raw[p + 2]])
         });
-        let bounds = self.area_bounds(height);
+        let (bounds, square) = (self.area_bounds(height), self.apparent_square(height));
         let offset = Vec2::new(x0 as f32, y0 as f32);
         self.scratch
             .join_slivers(grid, sliver_area(self.marker_size_cm, height))
@@ -292,7 +372,7 @@ impl MarkerDetector {
             .map(|f| {
                 let marker = DetectedMarker {
                     centre: f.sum / f.area as f32 + offset,
-                    colour: f.colour as usize,
+                    colour: (f.colour & !WEAK) as usize,
                     area: f.area,
                 };
                 Component {
@@ -300,7 +380,7 @@ impl MarkerDetector {
                     border: f.border,
                     peak_saturation: f.peak_sat,
                     peak_value: f.peak_val,
-                    verdict: self.verdict(&marker, &f, bounds),
+                    verdict: self.verdict(&marker, &f, bounds, square),
                 }
             })
             .collect()
@@ -312,10 +392,17 @@ impl MarkerDetector {
         marker: &DetectedMarker,
         fragment: &Fragment,
         (min_area, max_area): (u32, u32),
+        square: f32,
     ) -> Verdict {
         let border = &fragment.border;
+        let weak = fragment.colour & WEAK != 0;
         if marker.area < min_area {
             Verdict::TooSmall
+        } else if weak
+            && (marker.area as f32 > square
+                || border.outside > 0 && (border.runs_on > 0 || border.outside > border.inside))
+        {
+            Verdict::SkinLike
         } else if marker.area > max_area {
             Verdict::TooBig
         } else if self
@@ -412,6 +499,8 @@ struct Scratch {
     /// Per root fragment: its component's index in the output (`usize::MAX`: none yet).
     slot: Vec<usize>,
     stack: Vec<usize>,
+    /// The weak pixels' decided labels ([`promote_weak`]).
+    promoted: Vec<(usize, u8)>,
 }
 
 impl Scratch {
@@ -578,6 +667,10 @@ pub enum Verdict {
     /// Its colour runs on past the mask's edge along half its border or more: background that the
     /// mask leaked onto and cut through, not a square printed on the suit.
     RunsOffMask,
+    /// Only weakly of its colour throughout (as pale as skin, on skin's side of the colour's hue;
+    /// see [`SKIN_PIXEL_MAX_SATURATION`]) and larger than a marker's square or on the mask's edge:
+    /// a hand or a head, not a marker seen at a slant.
+    SkinLike,
 }
 
 /// One connected component of a marker colour, with what the tests looked at.
@@ -1066,5 +1159,112 @@ mod tests {
         }
         let mut detector = MarkerDetector::new(&suit());
         assert_eq!(detector.detect(&frame, &mask).len(), 3);
+    }
+
+    #[test]
+    fn weak_pixels_touching_a_strong_one_join_it_one_pixel_deep() {
+        // One row: red, two weak reds, nothing; below it a weak red outside the mask under the red.
+        const RED: u8 = 0;
+        let grid = Grid {
+            width: 4,
+            height: 2,
+        };
+        let mut labels = vec![
+            RED,
+            WEAK | RED,
+            WEAK | RED,
+            NONE,
+            WEAK | RED | OUTSIDE,
+            CLOTH,
+            CLOTH,
+            CLOTH,
+        ];
+        promote_weak(&mut labels, grid, &mut Vec::new());
+        assert_eq!(
+            labels,
+            vec![
+                RED,
+                RED,
+                WEAK | RED,
+                NONE,
+                RED | OUTSIDE,
+                CLOTH,
+                CLOTH,
+                CLOTH
+            ]
+        );
+    }
+
+    #[test]
+    fn pale_reds_on_skins_side_are_weak_and_other_colours_never() {
+        let suit = suit();
+        let (red, cyan) = (suit.markers[0].hsv, suit.markers[1].hsv);
+        let lut = ColourLut::new();
+        // Skin (hue 21.8°, saturation 0.55), a pale red on red's magenta side (hue 352°, 0.55), a
+        // printed red (0°, 0.85), a pale cyan.
+        assert!(is_weak(red, 35.0, lut.get([200, 130, 90])));
+        assert!(!is_weak(red, 35.0, lut.get([200, 90, 105])));
+        assert!(!is_weak(red, 35.0, lut.get([204, 31, 31])));
+        assert!(!is_weak(cyan, 35.0, lut.get([90, 200, 200])));
+    }
+
+    #[test]
+    fn a_hand_beside_a_red_marker_leaves_it_a_marker_at_its_place() {
+        // The fixture's red marker covers x 12..16, y 20..24; skin (hue 21.8°, saturation 0.55, inside
+        // red's hue gate) covers x 16..24, y 18..26 beside it. Taken as red, the two were one blob of
+        // 80 pixels, more than four 16-pixel squares.
+        let (mut frame, mask) = fixture();
+        paint(&mut frame, 16, 18, 8, [200, 130, 90]);
+        let mut detector = MarkerDetector::new(&suit());
+        let components = detector.components(&frame, &mask);
+        let found: Vec<_> = components
+            .iter()
+            .filter(|c| c.verdict == Verdict::Marker)
+            .collect();
+        assert_eq!(found.len(), 3, "{components:?}");
+        // The skin column x = 16 beside the marker joins it: 20 pixels, centre x (16·14 + 4·16.5)/20.
+        let red = found.iter().find(|c| c.marker.colour == 0).expect("red");
+        assert_eq!(red.marker.area, 20);
+        assert!(red.marker.centre.distance(Vec2::new(14.5, 22.0)) < 1e-4);
+        // The rest of the skin is its own, weak component: larger than a square.
+        assert!(components
+            .iter()
+            .any(|c| c.verdict == Verdict::SkinLike && c.marker.area == 60));
+    }
+
+    #[test]
+    fn a_pale_marker_within_the_cloth_counts_but_not_one_running_off_the_mask() {
+        // A marker at a slant, blurred to hue 13.4° and saturation 0.58: weak in every pixel.
+        let (mut frame, mask) = fixture();
+        let pale = [200, 110, 84];
+        for (x, y) in [
+            (30, 120),
+            (31, 120),
+            (30, 121),
+            (31, 121),
+            (30, 122),
+            (31, 122),
+        ] {
+            frame.put_pixel(x, y, image::Rgb(pale));
+        }
+        let mut detector = MarkerDetector::new(&suit());
+        let found = detector.detect(&frame, &mask);
+        assert!(
+            found
+                .iter()
+                .any(|m| m.colour == 0 && m.centre.distance(Vec2::new(31.0, 121.5)) < 1e-4),
+            "{found:?}"
+        );
+        // The same colour across the mask's right edge (x = 50) at y 140..143: its colour runs on.
+        for y in 140..143 {
+            for x in 48..53 {
+                frame.put_pixel(x, y, image::Rgb(pale));
+            }
+        }
+        let components = detector.components(&frame, &mask);
+        assert!(components
+            .iter()
+            .any(|c| c.verdict == Verdict::SkinLike && c.marker.centre.y == 141.5));
+        assert_eq!(detector.detect(&frame, &mask).len(), 4);
     }
 }
