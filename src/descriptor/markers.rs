@@ -165,8 +165,8 @@ const SKIN_MAX_SATURATION: f32 = 0.5;
 /// saturation: it joins a marker where it touches one of its strongly coloured pixels (a blurred
 /// rim) and is nothing otherwise ([`promote_weak`]). Rendered skin under the generator's light
 /// and shading reaches 0.58 (99th percentile of the pixels within ±40° of red, away from every
-/// marker, on the nine sequences of `scripts/eval_markers.sh` and the four fresh ones), a red
-/// marker's centre 0.59–0.69 (1st percentile) and 0.85 typically. Without it, a hand or a head
+/// marker, on the five sequences of `scripts/eval_markers.sh` and four more), a red marker's
+/// centre 0.59–0.69 (1st percentile) and 0.85 typically. Without it, a hand or a head
 /// beside a red marker was one component with it, too big or centred off the marker.
 const SKIN_PIXEL_MAX_SATURATION: f32 = 0.6;
 /// How far from its colour's hue, towards skin's, a pale pixel must lie to be weak: a red marker's
