@@ -90,8 +90,9 @@ pub struct DetectedMarker {
 #[derive(Clone, Debug)]
 pub struct MarkerDetector {
     lut: ColourLut,
-    /// The label of every 6-bit-per-channel RGB (indexed like [`ColourLut`]): a marker colour index,
-    /// `CLOTH` or `NONE`; one lookup per pixel in the labelling pass.
+    /// The label of every 6-bit-per-channel RGB (indexed like [`ColourLut`]): a marker colour index
+    /// (with `WEAK` set when only weakly of it), `CLOTH` or `NONE`; one lookup per pixel in the
+    /// labelling pass.
     pixel_label: Vec<u8>,
     /// The suit's saturation/value gates and marker/cloth hue tests.
     gate: MarkerGate,
@@ -111,8 +112,10 @@ const NONE: u8 = 0x7f;
 const CLOTH: u8 = 0x7e;
 /// Set on the label of a pixel only weakly of its marker colour ([`SKIN_PIXEL_MAX_SATURATION`]):
 /// `WEAK | k` connects to weak pixels of colour `k` only, unless [`promote_weak`] makes it `k`.
-/// Marker colour indices stay below it.
 const WEAK: u8 = 0x40;
+/// The largest marker colour index a label holds (later colours share it), so that `WEAK | k`
+/// stays below `CLOTH`.
+const MAX_COLOUR_LABEL: u8 = CLOTH - WEAK - 1;
 /// Set on the label of a pixel outside the mask (whose colour is still looked at).
 const OUTSIDE: u8 = 0x80;
 /// Pixels looked at around the mask's bounding box.
@@ -163,7 +166,8 @@ const SKIN_HUE_DEG: f32 = 20.0;
 const SKIN_MAX_SATURATION: f32 = 0.5;
 /// A pixel of a colour whose hue gate takes in skin is only weakly of that colour below this
 /// saturation: it joins a marker where it touches one of its strongly coloured pixels (a blurred
-/// rim) and is nothing otherwise ([`promote_weak`]). Rendered skin under the generator's light
+/// rim; [`promote_weak`]), and weak pixels among themselves make components that must also pass
+/// [`Verdict::SkinLike`]'s test. Rendered skin under the generator's light
 /// and shading reaches 0.58 (99th percentile of the pixels within ±40° of red, away from every
 /// marker, on the five sequences of `scripts/eval_markers.sh` and four more), a red marker's
 /// centre 0.59–0.69 (1st percentile) and 0.85 typically. Without it, a hand or a head
@@ -188,7 +192,7 @@ fn sliver_area(marker_size_cm: f32, height: f32) -> u32 {
     (SLIVER_SHARE * side * side).ceil() as u32
 }
 
-/// Is a pixel label one of the marker colours?
+/// Is a pixel label one of the marker colours, strongly or weakly?
 #[inline]
 fn is_marker_label(label: u8) -> bool {
     label < CLOTH
@@ -219,12 +223,17 @@ fn promote_weak(labels: &mut [u8], grid: Grid, promoted: &mut Vec<(usize, u8)>) 
     }
 }
 
+/// Whether the hue gate of marker colour `hsv` takes in skin's hue (red's does).
+fn gate_takes_skin(hsv: crate::colour::Hsv, hue_tolerance_deg: f32) -> bool {
+    crate::colour::hue_distance(hsv.hue, SKIN_HUE_DEG) <= hue_tolerance_deg
+}
+
 /// The saturation (0–255) a component's most saturated pixel must reach to be a marker of colour
 /// `hsv`: half the printed saturation, so a marker blurred into the cloth still passes, and for a
 /// colour whose hue gate takes in skin, more than skin reaches (hands next to red markers).
 fn min_peak_saturation(hsv: crate::colour::Hsv, hue_tolerance_deg: f32) -> u8 {
     let mut min = PEAK_SATURATION_SHARE * hsv.saturation;
-    if crate::colour::hue_distance(hsv.hue, SKIN_HUE_DEG) <= hue_tolerance_deg {
+    if gate_takes_skin(hsv, hue_tolerance_deg) {
         min = min.max(SKIN_MAX_SATURATION);
     }
     (min * 255.0).round() as u8
@@ -236,7 +245,7 @@ fn min_peak_saturation(hsv: crate::colour::Hsv, hue_tolerance_deg: f32) -> u8 {
 fn is_weak(hsv: crate::colour::Hsv, hue_tolerance_deg: f32, c: PixelColour) -> bool {
     use crate::colour::hue_distance;
     let hue = (c.hue as f32 + 0.5) * 360.0 / 256.0;
-    hue_distance(hsv.hue, SKIN_HUE_DEG) <= hue_tolerance_deg
+    gate_takes_skin(hsv, hue_tolerance_deg)
         && (c.sat as f32) < SKIN_PIXEL_MAX_SATURATION * 255.0
         && hue_distance(hue, hsv.hue) >= SKIN_SIDE_DEG
         && hue_distance(hue, SKIN_HUE_DEG) < hue_distance(hsv.hue, SKIN_HUE_DEG)
@@ -258,9 +267,9 @@ impl MarkerDetector {
                             .get(k)
                             .is_some_and(|m| is_weak(m.hsv, gates.hue_tolerance_deg, c)) =>
                     {
-                        WEAK | k.min(WEAK as usize - 1) as u8
+                        WEAK | k.min(MAX_COLOUR_LABEL as usize) as u8
                     }
-                    Some(k) => k.min(WEAK as usize - 1) as u8,
+                    Some(k) => k.min(MAX_COLOUR_LABEL as usize) as u8,
                     None if gate.is_cloth(c) => CLOTH,
                     None => NONE,
                 }
@@ -281,9 +290,10 @@ impl MarkerDetector {
                 .iter()
                 .map(|m| MIN_VALUE_SHARE * m.hsv.value / suit.background.hsv.value.max(1e-3))
                 .collect(),
-            has_weak_colours: suit.markers.iter().any(|m| {
-                crate::colour::hue_distance(m.hsv.hue, SKIN_HUE_DEG) <= gates.hue_tolerance_deg
-            }),
+            has_weak_colours: suit
+                .markers
+                .iter()
+                .any(|m| gate_takes_skin(m.hsv, gates.hue_tolerance_deg)),
             scratch: Scratch::default(),
         }
     }
@@ -485,8 +495,8 @@ impl Fragment {
 /// The detector's per-frame buffers, kept between frames.
 #[derive(Clone, Debug, Default)]
 struct Scratch {
-    /// Per pixel of the grid: a marker colour index, `CLOTH` or `NONE`, with `OUTSIDE` set outside
-    /// the mask.
+    /// Per pixel of the grid: a marker colour index (with `WEAK` set when only weakly of it),
+    /// `CLOTH` or `NONE`, with `OUTSIDE` set outside the mask.
     labels: Vec<u8>,
     /// Per pixel: the index of its fragment in `fragments`, or `UNSEEN`.
     fragment_of: Vec<u32>,
@@ -499,7 +509,7 @@ struct Scratch {
     /// Per root fragment: its component's index in the output (`usize::MAX`: none yet).
     slot: Vec<usize>,
     stack: Vec<usize>,
-    /// The weak pixels' decided labels ([`promote_weak`]).
+    /// The weak pixels [`promote_weak`] promotes, with their new labels.
     promoted: Vec<(usize, u8)>,
 }
 
