@@ -261,15 +261,18 @@ impl MarkerDetector {
                 let rgb = [(i >> 12) as u8, (i >> 6) as u8 & 63, i as u8 & 63].map(|c| c << 2);
                 let c = lut.get(rgb);
                 match gate.marker_index(c) {
-                    Some(k)
-                        if suit
+                    Some(k) => {
+                        let label = k.min(MAX_COLOUR_LABEL as usize) as u8;
+                        let weak = suit
                             .markers
                             .get(k)
-                            .is_some_and(|m| is_weak(m.hsv, gates.hue_tolerance_deg, c)) =>
-                    {
-                        WEAK | k.min(MAX_COLOUR_LABEL as usize) as u8
+                            .is_some_and(|m| is_weak(m.hsv, gates.hue_tolerance_deg, c));
+                        if weak {
+                            WEAK | label
+                        } else {
+                            label
+                        }
                     }
-                    Some(k) => k.min(MAX_COLOUR_LABEL as usize) as u8,
                     None if gate.is_cloth(c) => CLOTH,
                     None => NONE,
                 }
