@@ -20,7 +20,7 @@ use proptest::test_runner::Config;
 
 use suitcap::bvh::Motion;
 use suitcap::descriptor::codebook::{codebook_path, Codebook};
-use suitcap::descriptor::{Codebooks, HOG_CENTRES, HOG_CODEBOOK};
+use suitcap::descriptor::{Codebooks, HOG_CENTRES, HOG_CODEBOOK, HOG_CODEBOOK_VERSION};
 use suitcap::model::ModelFile;
 use suitcap::pose::regressor::{
     Regressor, REGRESSOR_FILE, REGRESSOR_KIND, REGRESSOR_VERSION, SKELETON_FILE,
@@ -309,7 +309,7 @@ impl ModelDir {
     fn codebook(&self, bytes: &[u8]) {
         let path = codebook_path(self.path(), HOG_CODEBOOK);
         std::fs::write(&path, bytes).expect("write");
-        let _ = Codebook::load(&path, HOG_CODEBOOK, HOG_CENTRES, 36);
+        let _ = Codebook::load(&path, HOG_CODEBOOK, HOG_CODEBOOK_VERSION, HOG_CENTRES, 36);
     }
 
     /// All three codebooks of the suit, the HOG one replaced.
@@ -328,7 +328,7 @@ fn decode_any(bytes: &[u8]) {
     for (kind, version) in [
         (REGRESSOR_KIND, REGRESSOR_VERSION),
         (SEGMENTER_KIND, SEGMENTER_VERSION),
-        (HOG_CODEBOOK, 1),
+        (HOG_CODEBOOK, HOG_CODEBOOK_VERSION),
     ] {
         let _ = ModelFile::decode(bytes, Path::new("fuzz.bin"), kind, version);
     }
@@ -524,7 +524,7 @@ proptest! {
         DIR.with(|d| {
             let (base, kind, version, load): (Vec<u8>, &str, u32, &Loader) = match which {
                 0 => (small_regressor(), REGRESSOR_KIND, REGRESSOR_VERSION, &ModelDir::regressor),
-                1 => (fixture("suits/default/codebook_hog.bin"), HOG_CODEBOOK, 1, &ModelDir::codebooks),
+                1 => (fixture("suits/default/codebook_hog.bin"), HOG_CODEBOOK, HOG_CODEBOOK_VERSION, &ModelDir::codebooks),
                 _ => (fixture("suits/default/segmenter.bin"), SEGMENTER_KIND, SEGMENTER_VERSION, &ModelDir::segmenter),
             };
             let model = ModelFile::decode(&base, Path::new("fixture.bin"), kind, version).expect("valid fixture");

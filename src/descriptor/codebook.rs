@@ -32,7 +32,8 @@ use rand_pcg::Pcg64Mcg;
 use crate::model::{ModelError, ModelFile};
 use crate::stats::squared_distance;
 
-/// Version of the codebook files.
+/// Version of the codebook files (the HOG codebook's is
+/// [`HOG_CODEBOOK_VERSION`](super::HOG_CODEBOOK_VERSION): its histograms changed meaning).
 pub const CODEBOOK_VERSION: u32 = 1;
 /// Number of nearest centres a histogram votes into.
 pub const SOFT_VOTES: usize = 5;
@@ -217,16 +218,22 @@ impl Codebook {
         Ok((codebook, inertia))
     }
 
-    /// Writes the codebook as a model file of `kind`.
-    pub fn save(&self, path: &Path, kind: &str) -> Result<(), ModelError> {
-        let mut m = ModelFile::new(kind, CODEBOOK_VERSION);
+    /// Writes the codebook as a model file of `kind` at `version`.
+    pub fn save(&self, path: &Path, kind: &str, version: u32) -> Result<(), ModelError> {
+        let mut m = ModelFile::new(kind, version);
         m.push("centres", &[self.k(), self.dim], self.centres.clone());
         m.write(path)
     }
 
-    /// Reads a codebook of `kind` with exactly `k` centres of `dim`.
-    pub fn load(path: &Path, kind: &str, k: usize, dim: usize) -> Result<Codebook, ModelError> {
-        let m = ModelFile::read(path, kind, CODEBOOK_VERSION)?;
+    /// Reads a codebook of `kind` at `version` with exactly `k` centres of `dim`.
+    pub fn load(
+        path: &Path,
+        kind: &str,
+        version: u32,
+        k: usize,
+        dim: usize,
+    ) -> Result<Codebook, ModelError> {
+        let m = ModelFile::read(path, kind, version)?;
         let centres = m.array(path, "centres", &[k, dim])?.to_vec();
         Ok(Codebook::new(dim, centres))
     }
@@ -345,12 +352,15 @@ mod tests {
         assert_eq!(found, vec![(0, 0), (0, 10), (10, 0)]);
         let dir = tempfile::tempdir().expect("tempdir");
         let path = dir.path().join("c.bin");
-        codebook.save(&path, "test-codebook").expect("save");
+        codebook
+            .save(&path, "test-codebook", CODEBOOK_VERSION)
+            .expect("save");
         assert_eq!(
-            Codebook::load(&path, "test-codebook", 3, 2).expect("load"),
+            Codebook::load(&path, "test-codebook", CODEBOOK_VERSION, 3, 2).expect("load"),
             codebook
         );
-        assert!(Codebook::load(&path, "test-codebook", 4, 2).is_err());
+        assert!(Codebook::load(&path, "test-codebook", CODEBOOK_VERSION, 4, 2).is_err());
+        assert!(Codebook::load(&path, "test-codebook", CODEBOOK_VERSION + 1, 3, 2).is_err());
         assert!(Codebook::train("few", &data[..4], 2, 3, 10, 1).is_err());
     }
 

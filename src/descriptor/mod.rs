@@ -21,7 +21,7 @@ use image::RgbImage;
 use crate::mask::Mask;
 use crate::model::ModelError;
 use crate::suit::SuitDefinition;
-use codebook::{codebook_path, Codebook};
+use codebook::{codebook_path, Codebook, CODEBOOK_VERSION};
 use feature_context::{feature_contexts, FC_LEN};
 use markers::{DetectedMarker, MarkerDetector};
 
@@ -33,6 +33,9 @@ pub const SILHOUETTE_CENTRES: usize = 100;
 pub const FC_CODEBOOK: &str = "codebook_fc";
 pub const HOG_CODEBOOK: &str = "codebook_hog";
 pub const SILHOUETTE_CODEBOOK: &str = "codebook_silhouette";
+/// Version of the HOG codebook file: 2 since its block histograms count the person's gradients only
+/// ([`hog::person_block_histograms`]); a suit trained before must be retrained.
+pub const HOG_CODEBOOK_VERSION: u32 = 2;
 
 /// Which descriptor to compute, for the experiments of the paper.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -120,18 +123,21 @@ impl Codebooks {
             fc: Codebook::load(
                 &codebook_path(suit_dir, FC_CODEBOOK),
                 FC_CODEBOOK,
+                CODEBOOK_VERSION,
                 FC_CENTRES,
                 FC_LEN,
             )?,
             hog: Codebook::load(
                 &codebook_path(suit_dir, HOG_CODEBOOK),
                 HOG_CODEBOOK,
+                HOG_CODEBOOK_VERSION,
                 HOG_CENTRES,
                 hog::HOG_BINS,
             )?,
             silhouette: Codebook::load(
                 &codebook_path(suit_dir, SILHOUETTE_CODEBOOK),
                 SILHOUETTE_CODEBOOK,
+                CODEBOOK_VERSION,
                 SILHOUETTE_CENTRES,
                 silhouette::SC_RADIAL * silhouette::SC_ANGULAR,
             )?,
@@ -139,13 +145,20 @@ impl Codebooks {
     }
 
     pub fn save(&self, suit_dir: &Path) -> Result<(), ModelError> {
-        self.fc
-            .save(&codebook_path(suit_dir, FC_CODEBOOK), FC_CODEBOOK)?;
-        self.hog
-            .save(&codebook_path(suit_dir, HOG_CODEBOOK), HOG_CODEBOOK)?;
+        self.fc.save(
+            &codebook_path(suit_dir, FC_CODEBOOK),
+            FC_CODEBOOK,
+            CODEBOOK_VERSION,
+        )?;
+        self.hog.save(
+            &codebook_path(suit_dir, HOG_CODEBOOK),
+            HOG_CODEBOOK,
+            HOG_CODEBOOK_VERSION,
+        )?;
         self.silhouette.save(
             &codebook_path(suit_dir, SILHOUETTE_CODEBOOK),
             SILHOUETTE_CODEBOOK,
+            CODEBOOK_VERSION,
         )
     }
 }
@@ -196,7 +209,7 @@ impl Describer {
         };
         let feature_contexts = feature_contexts(&markers, height);
         let hog_blocks = if wants(&[Hog, FcHog, Full]) {
-            let blocks = hog::block_histograms(frame, bbox);
+            let blocks = hog::person_block_histograms(frame, mask, bbox);
             blocks
                 .values
                 .chunks_exact(blocks.bins)
