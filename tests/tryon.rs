@@ -276,7 +276,9 @@ fn suit_pattern_writes_true_size_panels() {
 
 /// The live app in a virtual X display (CI installs Xvfb; without `xvfb-run` the test says so and
 /// passes, since the window needs a display): a recorded clip stands in for the camera, played at its
-/// rate; every frame is shown and recorded, and the take is complete when the input ends.
+/// rate; every frame is either shown and recorded or, when the machine falls behind (a live camera
+/// does not wait), counted as dropped, and the take is complete when the input ends. How many are
+/// dropped depends on how busy the machine is, so the test asks only that none goes missing.
 #[test]
 fn live_shows_and_records_every_frame_of_a_paced_input() {
     let Ok(xvfb) = which("xvfb-run") else {
@@ -301,8 +303,16 @@ fn live_shows_and_records_every_frame_of_a_paced_input() {
         .expect("runs");
     let message = text(&output);
     assert!(output.status.success(), "{message}");
-    assert_eq!(take_frames(&take), 12, "{message}");
-    assert!(message.contains("12 frames shown"), "{message}");
+    // "N frames shown, D camera frames dropped (…)".
+    let count_before = |words: &str| -> Option<usize> {
+        let at = message.find(words)?;
+        message[..at].split_whitespace().last()?.parse().ok()
+    };
+    let shown = count_before(" frames shown").expect("the shown count");
+    let dropped = count_before(" camera frames dropped").expect("the dropped count");
+    assert!(shown > 0, "{message}");
+    assert_eq!(shown + dropped, 12, "{message}");
+    assert_eq!(take_frames(&take), shown, "{message}");
 }
 
 fn which(program: &str) -> Result<PathBuf, ()> {

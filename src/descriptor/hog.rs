@@ -135,12 +135,7 @@ fn histograms(
     let grey = grey_patch(frame, cx0, cy0, cw, ch);
     let col_block: Vec<usize> = (cx0..cx1).map(|x| block_index(x - x0, x1 - x0)).collect();
     let row_block: Vec<usize> = (cy0..cy1).map(|y| block_index(y - y0, y1 - y0)).collect();
-    let support = match support {
-        // A box reaching past the mask (not the mask's own box) has no person there.
-        Some((mask, _)) if cx1 > mask.width() || cy1 > mask.height() => return out,
-        Some((mask, radius)) => Some(grown_mask_window(mask, (cx0, cy0, cw, ch), radius)),
-        None => None,
-    };
+    let support = support.map(|(mask, radius)| grown_mask_window(mask, (cx0, cy0, cw, ch), radius));
 
     // Row scratch, allocated once per call: gradients, magnitudes and bin positions.
     let pw = cw + 2;
@@ -198,9 +193,9 @@ fn histograms(
 
 /// Which pixels of the window `(x0, y0, width, height)` of `mask` lie within `radius` pixels in x and
 /// in y (a square neighbourhood) of a set mask pixel, mask pixels outside the window included;
-/// `width × height` values, row-major. Along the rows a sliding count ([`near_any`]), then across
-/// them an OR of the `2·radius + 1` rows around each. The window must lie inside the mask.
-pub fn grown_mask_window(
+/// `width × height` values, row-major; pixels beyond the mask's edges are not the person. Along the
+/// rows [`near_any`], then across them an OR of the `2·radius + 1` rows around each.
+fn grown_mask_window(
     mask: &Mask,
     (x0, y0, width, height): (u32, u32, usize, usize),
     radius: u32,
@@ -236,7 +231,7 @@ pub fn grown_mask_window(
 
 /// `out[i]` = is any of `line[from + i − r ..= from + i + r]` (clipped to the line) set: an OR of
 /// the `2r + 1` shifted runs of the line, each a plain loop over bytes that the compiler vectorises.
-pub fn near_any(line: &[bool], from: usize, r: usize, out: &mut [bool]) {
+fn near_any(line: &[bool], from: usize, r: usize, out: &mut [bool]) {
     out.fill(false);
     let n = out.len();
     for d in 0..=2 * r {
@@ -660,11 +655,18 @@ mod tests {
             person_block_histograms(&frame, &Mask::empty(w, h), (20, 10, 40, 40)),
             BlockHistograms::zeros()
         );
-        // A box reaching past the mask: all zero, no panic.
+        // A box reaching past the mask's edges: nobody there, all zero.
         assert_eq!(
             person_block_histograms(&frame, &Mask::empty(8, 8), (0, 0, 40, 40)),
             BlockHistograms::zeros()
         );
+        let small = Mask::from_pixels(8, 8, vec![true; 64]).expect("8×8");
+        let past = person_block_histograms(&frame, &small, (0, 0, 40, 40));
+        assert!(past.block(0, 0).iter().any(|&v| v != 0.0));
+        assert!(past
+            .block(HOG_GRID - 1, HOG_GRID - 1)
+            .iter()
+            .all(|&v| v == 0.0));
     }
 
     #[test]
