@@ -33,6 +33,18 @@ impl Mask {
         })
     }
 
+    /// A mask whose pixel (x, y) is `f(x, y)`.
+    pub fn from_fn(width: u32, height: u32, mut f: impl FnMut(u32, u32) -> bool) -> Mask {
+        Mask {
+            width,
+            height,
+            pixels: (0..height)
+                .flat_map(|y| (0..width).map(move |x| (x, y)))
+                .map(|(x, y)| f(x, y))
+                .collect(),
+        }
+    }
+
     /// From a grey image: ≥ 128 is person.
     pub fn from_gray(image: &GrayImage) -> Mask {
         Mask {
@@ -157,6 +169,13 @@ impl Agreement {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn from_fn_is_row_major() {
+        let mask = Mask::from_fn(3, 2, |x, y| x == y);
+        assert_eq!(mask.pixels(), &[true, false, false, false, true, false]);
+        assert!(mask.get(1, 1) && !mask.get(1, 0));
+    }
 
     #[test]
     fn iou_of_two_4x4_masks() {

@@ -615,15 +615,7 @@ mod tests {
     fn background_away_from_the_person_changes_nothing() {
         // The person: a 20×30 rectangle at (20, 10) of a 64×48 noise frame.
         let (w, h) = (64u32, 48u32);
-        let on_person = |x: u32, y: u32| (20..40).contains(&x) && (10..40).contains(&y);
-        let mask = Mask::from_pixels(
-            w,
-            h,
-            (0..h)
-                .flat_map(|y| (0..w).map(move |x| on_person(x, y)))
-                .collect(),
-        )
-        .expect("64×48");
+        let mask = Mask::from_fn(w, h, |x, y| (20..40).contains(&x) && (10..40).contains(&y));
         let frame = noise_image(w, h, 5);
         // Other background wherever the Sobel stencil of a counted pixel (within the support radius
         // of the mask, plus one) cannot reach.
@@ -673,18 +665,10 @@ mod tests {
     fn background_inside_the_box_is_left_out() {
         // An L-shaped person: its box holds background in the upper right, which changes.
         let (w, h) = (48u32, 48u32);
-        let on_person = |x: u32, y: u32| {
+        let mask = Mask::from_fn(w, h, |x, y| {
             ((8..16).contains(&x) && (8..40).contains(&y))
                 || ((8..40).contains(&x) && (32..40).contains(&y))
-        };
-        let mask = Mask::from_pixels(
-            w,
-            h,
-            (0..h)
-                .flat_map(|y| (0..w).map(move |x| on_person(x, y)))
-                .collect(),
-        )
-        .expect("48×48");
+        });
         let frame = noise_image(w, h, 7);
         let other = noise_image(w, h, 8);
         // Background at least the support radius + 1 from the L.

@@ -295,11 +295,6 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    fn mask_from_fn(w: u32, h: u32, f: impl Fn(u32, u32) -> bool) -> Mask {
-        let pixels = (0..w * h).map(|i| f(i % w, i / w)).collect();
-        Mask::from_pixels(w, h, pixels).expect("size")
-    }
-
     /// A crude person: head, torso, arms out to one side, two legs.
     fn person(x: u32, y: u32) -> bool {
         let head = (x as i32 - 20).pow(2) + (y as i32 - 6).pow(2) <= 25;
@@ -335,7 +330,7 @@ mod tests {
     #[test]
     fn square_contour_is_its_boundary_pixels_in_order() {
         // 10×10 square at (3, 2) in a 16×14 mask: 36 boundary pixels, clockwise from (3, 2).
-        let mask = mask_from_fn(16, 14, |x, y| (3..13).contains(&x) && (2..12).contains(&y));
+        let mask = Mask::from_fn(16, 14, |x, y| (3..13).contains(&x) && (2..12).contains(&y));
         let c = outer_contour(&mask);
         assert_eq!(c.len(), 36);
         assert_eq!(c[0], Vec2::new(3.0, 2.0));
@@ -359,7 +354,7 @@ mod tests {
 
     #[test]
     fn single_pixel_and_empty_masks() {
-        let one = mask_from_fn(5, 5, |x, y| x == 2 && y == 3);
+        let one = Mask::from_fn(5, 5, |x, y| x == 2 && y == 3);
         assert_eq!(outer_contour(&one), vec![Vec2::new(2.0, 3.0)]);
         assert!(outer_contour(&Mask::empty(5, 5)).is_empty());
         assert!(outer_contour(&Mask::empty(0, 0)).is_empty());
@@ -374,7 +369,7 @@ mod tests {
     #[test]
     fn largest_component_wins_and_holes_are_ignored() {
         // A 3×3 blob at the top left (first in raster order) and a 6×6 ring (with a hole) below.
-        let mask = mask_from_fn(12, 12, |x, y| {
+        let mask = Mask::from_fn(12, 12, |x, y| {
             let small = x < 3 && y < 3;
             let ring = (4..10).contains(&x)
                 && (4..10).contains(&y)
@@ -385,7 +380,7 @@ mod tests {
         assert_eq!(c[0], Vec2::new(4.0, 4.0));
         assert_eq!(c.len(), 20, "outer boundary of the 6×6 ring only");
         // Diagonal-only contact does not join 4-connected components.
-        let diagonal = mask_from_fn(4, 4, |x, y| {
+        let diagonal = Mask::from_fn(4, 4, |x, y| {
             (x == 0 && y == 0) || (x == 1 && y == 1) || (x == 2 && y == 1)
         });
         assert_eq!(
@@ -396,7 +391,7 @@ mod tests {
 
     #[test]
     fn thin_line_is_traced_there_and_back() {
-        let mask = mask_from_fn(7, 3, |x, y| y == 1 && (1..6).contains(&x));
+        let mask = Mask::from_fn(7, 3, |x, y| y == 1 && (1..6).contains(&x));
         let c = outer_contour(&mask);
         let xs: Vec<f32> = c.iter().map(|p| p.x).collect();
         assert_eq!(xs, vec![1.0, 2.0, 3.0, 4.0, 5.0, 4.0, 3.0, 2.0]);
@@ -420,7 +415,7 @@ mod tests {
             }
         }
         // The square mask's own contour (36 unit steps) resampled to 72 points: spacing 0.5.
-        let mask = mask_from_fn(12, 12, |x, y| (1..11).contains(&x) && (1..11).contains(&y));
+        let mask = Mask::from_fn(12, 12, |x, y| (1..11).contains(&x) && (1..11).contains(&y));
         let r = resample_closed(&outer_contour(&mask), 72);
         for i in 0..72 {
             let d = (r[(i + 1) % 72] - r[i]).length();
@@ -472,8 +467,8 @@ mod tests {
 
     #[test]
     fn scaling_the_mask_by_two_changes_little() {
-        let small = mask_from_fn(48, 56, person);
-        let big = mask_from_fn(96, 112, |x, y| person(x / 2, y / 2));
+        let small = Mask::from_fn(48, 56, person);
+        let big = Mask::from_fn(96, 112, |x, y| person(x / 2, y / 2));
         let (a, b) = (
             silhouette_shape_contexts(&small),
             silhouette_shape_contexts(&big),
@@ -486,14 +481,14 @@ mod tests {
 
     #[test]
     fn translating_the_mask_changes_nothing() {
-        let a = mask_from_fn(48, 56, person);
-        let b = mask_from_fn(70, 90, |x, y| x >= 13 && y >= 21 && person(x - 13, y - 21));
+        let a = Mask::from_fn(48, 56, person);
+        let b = Mask::from_fn(70, 90, |x, y| x >= 13 && y >= 21 && person(x - 13, y - 21));
         assert_eq!(silhouette_shape_contexts(&a), silhouette_shape_contexts(&b));
     }
 
     #[test]
     fn every_histogram_sums_to_one() {
-        let h = silhouette_shape_contexts(&mask_from_fn(48, 56, person));
+        let h = silhouette_shape_contexts(&Mask::from_fn(48, 56, person));
         assert_eq!(h.len(), CONTOUR_POINTS);
         for row in &h {
             assert!((row.iter().sum::<f32>() - 1.0).abs() < 1e-5);
@@ -508,7 +503,7 @@ mod tests {
     #[test]
     fn timing_person_200x400() {
         // Not asserted; run with `cargo test --release -- --nocapture timing`.
-        let mask = mask_from_fn(220, 420, |x, y| person(x * 48 / 210, y * 56 / 410));
+        let mask = Mask::from_fn(220, 420, |x, y| person(x * 48 / 210, y * 56 / 410));
         let contour = outer_contour(&mask);
         let points = resample_closed(&contour, CONTOUR_POINTS);
         let runs = 20;
