@@ -203,7 +203,8 @@ enum Command {
         #[command(subcommand)]
         command: SuitCommand,
     },
-    /// Validate a suit directory (suit.toml) and, optionally, a dataset against it.
+    /// Validate a suit directory (suit.toml, and that its trained models, if any, load with this
+    /// build) and, optionally, a dataset against it.
     Check {
         #[arg(long, default_value = "suits/default")]
         suit: PathBuf,
@@ -299,6 +300,40 @@ fn save_frame(image: &image::RgbImage, path: &Path, jpeg: Option<u8>) -> anyhow:
     Ok(())
 }
 
+/// Loads a suit's trained models as `run` would, so a stale or damaged file (a model from another
+/// version, a truncated download) is named here rather than at the first frame. A suit with no
+/// trained model yet is fine: it only needs training.
+fn check_trained_models(suit: &Path) -> anyhow::Result<()> {
+    use suitcap::pipeline::PosePipeline;
+    use suitcap::pose::regressor::REGRESSOR_FILE;
+    use suitcap::pose::smoothing::{JointLimits, JOINT_LIMITS_FILE};
+    use suitcap::segment::tables::SEGMENTER_FILE;
+    let trained = [SEGMENTER_FILE, REGRESSOR_FILE]
+        .iter()
+        .any(|file| suit.join(file).exists());
+    if !trained {
+        println!(
+            "no trained models yet: `suitcap-train suit --suit {} --data DATASET …` trains them",
+            suit.display()
+        );
+        return Ok(());
+    }
+    let pipeline = PosePipeline::load(suit)?;
+    let limits = suit.join(JOINT_LIMITS_FILE);
+    let limits = if limits.exists() {
+        JointLimits::load(&limits)?;
+        ", joint limits"
+    } else {
+        ""
+    };
+    println!(
+        "trained models load: segmenter tables, codebooks, regressor ({} descriptor, {} relevance vectors){limits}",
+        pipeline.regressor.descriptor.name(),
+        pipeline.regressor.rvm.len()
+    );
+    Ok(())
+}
+
 fn check(suit: &Path, data: Option<&Path>) -> anyhow::Result<()> {
     let definition = SuitDefinition::load_dir(suit)?;
     println!(
@@ -309,6 +344,7 @@ fn check(suit: &Path, data: Option<&Path>) -> anyhow::Result<()> {
         definition.pitch_cm(),
         definition.skeleton.joints.len()
     );
+    check_trained_models(suit)?;
     if let Some(data) = data {
         let dataset = suitcap::dataset::Dataset::open(data)?;
         definition

@@ -112,4 +112,49 @@ fn a_truncated_model_file_is_a_clear_error() {
         stderr.contains("regressor.bin") && stderr.contains("truncated"),
         "{stderr}"
     );
+    // `check` finds it before any frame is read.
+    let output = Command::new(env!("CARGO_BIN_EXE_suitcap"))
+        .arg("check")
+        .arg("--suit")
+        .arg(&suit)
+        .output()
+        .expect("runs");
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("regressor.bin") && stderr.contains("truncated"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn check_loads_the_trained_models() {
+    let check = |suit: &Path| {
+        let output = Command::new(env!("CARGO_BIN_EXE_suitcap"))
+            .arg("check")
+            .arg("--suit")
+            .arg(suit)
+            .output()
+            .expect("runs");
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    };
+    let shipped = check(&repo("suits/default"));
+    assert!(
+        shipped.contains("trained models load") && shipped.contains("relevance vectors"),
+        "{shipped}"
+    );
+    // A suit defined but not trained yet is fine, and says what to do.
+    let tmp = tempfile::tempdir().expect("tempdir");
+    std::fs::copy(
+        repo("suits/default/suit.toml"),
+        tmp.path().join("suit.toml"),
+    )
+    .expect("copy");
+    let untrained = check(tmp.path());
+    assert!(untrained.contains("no trained models yet"), "{untrained}");
 }
