@@ -300,37 +300,58 @@ fn save_frame(image: &image::RgbImage, path: &Path, jpeg: Option<u8>) -> anyhow:
     Ok(())
 }
 
-/// Loads a suit's trained models as `run` would, so a stale or damaged file (a model from another
-/// version, a truncated download) is named here rather than at the first frame. A suit with no
-/// trained model yet is fine: it only needs training.
-fn check_trained_models(suit: &Path) -> anyhow::Result<()> {
-    use suitcap::pipeline::PosePipeline;
-    use suitcap::pose::regressor::REGRESSOR_FILE;
+/// Loads each trained model a suit has as `run` would, so a stale or damaged file (a model from
+/// another version, a truncated download) is named here rather than at the first frame; the ones
+/// not trained yet are listed (a suit part-way through training is not an error).
+fn check_trained_models(suit: &Path, definition: &SuitDefinition) -> anyhow::Result<()> {
+    use suitcap::descriptor::codebook::codebook_path;
+    use suitcap::descriptor::{Codebooks, FC_CODEBOOK, HOG_CODEBOOK, SILHOUETTE_CODEBOOK};
+    use suitcap::pose::regressor::{Regressor, REGRESSOR_FILE};
     use suitcap::pose::smoothing::{JointLimits, JOINT_LIMITS_FILE};
     use suitcap::segment::tables::SEGMENTER_FILE;
-    let trained = [SEGMENTER_FILE, REGRESSOR_FILE]
+    let (mut loaded, mut missing) = (Vec::new(), Vec::new());
+    if suit.join(SEGMENTER_FILE).exists() {
+        SegmenterTables::load(suit)?;
+        loaded.push("segmenter tables".to_string());
+    } else {
+        missing.push(SEGMENTER_FILE);
+    }
+    let codebooks = [FC_CODEBOOK, HOG_CODEBOOK, SILHOUETTE_CODEBOOK];
+    if codebooks
         .iter()
-        .any(|file| suit.join(file).exists());
-    if !trained {
+        .any(|kind| codebook_path(suit, kind).exists())
+    {
+        Codebooks::load(suit)?;
+        loaded.push("codebooks".to_string());
+    } else {
+        missing.push("codebook_*.bin");
+    }
+    if suit.join(REGRESSOR_FILE).exists() {
+        let regressor = Regressor::load(suit, definition)?;
+        loaded.push(format!(
+            "regressor ({} descriptor, {} relevance vectors)",
+            regressor.descriptor.name(),
+            regressor.rvm.len()
+        ));
+    } else {
+        missing.push(REGRESSOR_FILE);
+    }
+    if suit.join(JOINT_LIMITS_FILE).exists() {
+        JointLimits::load(&suit.join(JOINT_LIMITS_FILE))?;
+        loaded.push("joint limits".to_string());
+    } else {
+        missing.push(JOINT_LIMITS_FILE);
+    }
+    if !loaded.is_empty() {
+        println!("trained models load: {}", loaded.join(", "));
+    }
+    if !missing.is_empty() {
         println!(
-            "no trained models yet: `suitcap-train suit --suit {} --data DATASET …` trains them",
+            "not trained yet: {} (`suitcap-train suit --suit {} --data DATASET …` trains them)",
+            missing.join(", "),
             suit.display()
         );
-        return Ok(());
     }
-    let pipeline = PosePipeline::load(suit)?;
-    let limits = suit.join(JOINT_LIMITS_FILE);
-    let limits = if limits.exists() {
-        JointLimits::load(&limits)?;
-        ", joint limits"
-    } else {
-        ""
-    };
-    println!(
-        "trained models load: segmenter tables, codebooks, regressor ({} descriptor, {} relevance vectors){limits}",
-        pipeline.regressor.descriptor.name(),
-        pipeline.regressor.rvm.len()
-    );
     Ok(())
 }
 
@@ -344,7 +365,7 @@ fn check(suit: &Path, data: Option<&Path>) -> anyhow::Result<()> {
         definition.pitch_cm(),
         definition.skeleton.joints.len()
     );
-    check_trained_models(suit)?;
+    check_trained_models(suit, &definition)?;
     if let Some(data) = data {
         let dataset = suitcap::dataset::Dataset::open(data)?;
         definition
