@@ -347,7 +347,7 @@ fn check_trained_models(suit: &Path, definition: &SuitDefinition) -> anyhow::Res
     }
     if !missing.is_empty() {
         println!(
-            "not trained yet: {} (`suitcap-train suit --suit {} --data DATASET …` trains them)",
+            "not trained yet: {} (`suitcap-train suit --suit {} --data DATASET …` trains the models, `suitcap-train limits` the joint limits)",
             missing.join(", "),
             suit.display()
         );
