@@ -97,33 +97,32 @@ fn a_truncated_model_file_is_a_clear_error() {
     let bytes = std::fs::read(repo("suits/default/regressor.bin")).expect("read");
     std::fs::write(suit.join("regressor.bin"), &bytes[..bytes.len() / 3]).expect("write");
     let data = generated_clip(&tmp.path().join("clip"));
-    let output = Command::new(env!("CARGO_BIN_EXE_suitcap"))
-        .args(["run"])
-        .arg(data.join("frames"))
-        .arg("--suit")
-        .arg(&suit)
-        .arg("--out")
-        .arg(tmp.path().join("out"))
-        .output()
-        .expect("runs");
-    assert!(!output.status.success());
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        stderr.contains("regressor.bin") && stderr.contains("truncated"),
-        "{stderr}"
+    let names_the_regressor = |output: std::process::Output| {
+        assert!(!output.status.success());
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(
+            stderr.contains("regressor.bin") && stderr.contains("truncated"),
+            "{stderr}"
+        );
+    };
+    names_the_regressor(
+        Command::new(env!("CARGO_BIN_EXE_suitcap"))
+            .args(["run"])
+            .arg(data.join("frames"))
+            .arg("--suit")
+            .arg(&suit)
+            .arg("--out")
+            .arg(tmp.path().join("out"))
+            .output()
+            .expect("runs"),
     );
     // `check` finds it before any frame is read.
-    let output = Command::new(env!("CARGO_BIN_EXE_suitcap"))
-        .arg("check")
-        .arg("--suit")
-        .arg(&suit)
-        .output()
-        .expect("runs");
-    assert!(!output.status.success());
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        stderr.contains("regressor.bin") && stderr.contains("truncated"),
-        "{stderr}"
+    names_the_regressor(
+        Command::new(env!("CARGO_BIN_EXE_suitcap"))
+            .args(["check", "--suit"])
+            .arg(&suit)
+            .output()
+            .expect("runs"),
     );
 }
 
@@ -148,25 +147,19 @@ fn check_loads_the_trained_models() {
         shipped.contains("trained models load") && shipped.contains("relevance vectors"),
         "{shipped}"
     );
-    // A suit defined but not trained yet is fine, and says what to do.
+    // A suit defined but not trained yet is fine, and says what to do; so is one part-way through
+    // training (the segmenter only).
     let tmp = tempfile::tempdir().expect("tempdir");
-    std::fs::copy(
-        repo("suits/default/suit.toml"),
-        tmp.path().join("suit.toml"),
-    )
-    .expect("copy");
-    let untrained = check(tmp.path());
+    let add = |file: &str| {
+        std::fs::copy(repo("suits/default").join(file), tmp.path().join(file)).expect("copy");
+        check(tmp.path())
+    };
+    let untrained = add("suit.toml");
     assert!(
         untrained.contains("not trained yet: segmenter.bin, codebook_*.bin, regressor.bin"),
         "{untrained}"
     );
-    // Part-way through training (the segmenter only) is fine too.
-    std::fs::copy(
-        repo("suits/default/segmenter.bin"),
-        tmp.path().join("segmenter.bin"),
-    )
-    .expect("copy");
-    let part = check(tmp.path());
+    let part = add("segmenter.bin");
     assert!(
         part.contains("trained models load: segmenter tables\n")
             && part.contains("not trained yet: codebook_*.bin, regressor.bin"),
