@@ -336,8 +336,9 @@ fn check_trained_models(suit: &Path, definition: &SuitDefinition) -> anyhow::Res
     } else {
         missing.push(REGRESSOR_FILE);
     }
-    if suit.join(JOINT_LIMITS_FILE).exists() {
-        JointLimits::load(&suit.join(JOINT_LIMITS_FILE))?;
+    let limits = suit.join(JOINT_LIMITS_FILE);
+    if limits.exists() {
+        JointLimits::load(&limits)?;
         loaded.push("joint limits".to_string());
     } else {
         missing.push(JOINT_LIMITS_FILE);

@@ -8,6 +8,20 @@ fn repo(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
 }
 
+fn suitcap() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_suitcap"))
+}
+
+/// The command's stdout, after checking that it succeeded (its stderr is the failure message).
+fn succeeded(output: std::process::Output) -> String {
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
 /// Renders a 12-frame dataset with the workspace's `suitcap-synth` binary (the tools crate depends on
 /// this one, so its library is not reachable from here; the test command builds the workspace first).
 fn generated_clip(dir: &Path) -> PathBuf {
@@ -36,21 +50,18 @@ fn run_writes_one_bvh_frame_per_input_frame() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let data = generated_clip(&tmp.path().join("clip"));
     let out = tmp.path().join("out");
-    let output = Command::new(env!("CARGO_BIN_EXE_suitcap"))
-        .args(["run"])
-        .arg(data.join("frames"))
-        .args([
-            "--suit",
-            repo("suits/default").to_str().expect("utf-8 path"),
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .expect("runs");
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+    succeeded(
+        suitcap()
+            .args(["run"])
+            .arg(data.join("frames"))
+            .args([
+                "--suit",
+                repo("suits/default").to_str().expect("utf-8 path"),
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .expect("runs"),
     );
     let take = suitcap::bvh::Motion::load(&out.join("take.bvh")).expect("a valid BVH");
     assert_eq!(take.frame_count(), 12);
@@ -106,7 +117,7 @@ fn a_truncated_model_file_is_a_clear_error() {
         );
     };
     names_the_regressor(
-        Command::new(env!("CARGO_BIN_EXE_suitcap"))
+        suitcap()
             .args(["run"])
             .arg(data.join("frames"))
             .arg("--suit")
@@ -118,7 +129,7 @@ fn a_truncated_model_file_is_a_clear_error() {
     );
     // `check` finds it before any frame is read.
     names_the_regressor(
-        Command::new(env!("CARGO_BIN_EXE_suitcap"))
+        suitcap()
             .args(["check", "--suit"])
             .arg(&suit)
             .output()
@@ -129,18 +140,13 @@ fn a_truncated_model_file_is_a_clear_error() {
 #[test]
 fn check_loads_the_trained_models() {
     let check = |suit: &Path| {
-        let output = Command::new(env!("CARGO_BIN_EXE_suitcap"))
-            .arg("check")
-            .arg("--suit")
-            .arg(suit)
-            .output()
-            .expect("runs");
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
-        String::from_utf8_lossy(&output.stdout).into_owned()
+        succeeded(
+            suitcap()
+                .args(["check", "--suit"])
+                .arg(suit)
+                .output()
+                .expect("runs"),
+        )
     };
     let shipped = check(&repo("suits/default"));
     assert!(
