@@ -1,7 +1,9 @@
 //! The per-frame segmenter: learned tables → grid graph → min-cut → clean-up → full-resolution mask.
 //!
 //! For every frame [`Segmenter::segment`]:
-//! 1. box-downscales the frame by the tables' factor and computes colour bins and gradients;
+//! 1. box-downscales the frame by the tables' factor (for frames taller than the training's, by a
+//!    larger one that keeps the cut's grid near the trained one: [`SegmenterTables::cut_factor`])
+//!    and computes colour bins and gradients;
 //! 2. builds the graph: unaries `σ_C·C + σ_G·G + σ_M·M + σ_T·T` per pixel (the motion and temporal terms
 //!    use the segmenter's own masks of the previous one and two frames; the first frame uses the label
 //!    prior and the second the terms it has), pairwise weights from the neighbourhood table on the four
@@ -371,7 +373,8 @@ impl Segmenter {
 
     /// Builds the frame's graph (without cutting it); the graph is then available from [`Segmenter::graph`].
     pub fn build_graph(&mut self, frame: &RgbImage) {
-        let (w, h) = downscale(frame, self.tables.downscale, &mut self.small);
+        let factor = self.tables.cut_factor(frame.height());
+        let (w, h) = downscale(frame, factor, &mut self.small);
         self.features
             .compute(&self.small, w, h, &self.lut, &self.gate);
         self.fill_graph();
@@ -463,7 +466,8 @@ impl Segmenter {
     fn segment_once(&mut self, frame: &RgbImage) -> Segmentation {
         let mut times = StageTimes::default();
         let started = Instant::now();
-        let (w, h) = downscale(frame, self.tables.downscale, &mut self.small);
+        let factor = self.tables.cut_factor(frame.height());
+        let (w, h) = downscale(frame, factor, &mut self.small);
         self.features
             .compute(&self.small, w, h, &self.lut, &self.gate);
         times.features = ms(started);
@@ -631,7 +635,7 @@ impl Segmenter {
     /// are decided by their own colour against the upsampled cut.
     fn refine(&self, frame: &RgbImage, labels: &[bool], w: usize, h: usize) -> Mask {
         let (fw, fh) = (frame.width(), frame.height());
-        let f = self.tables.downscale.max(1) as f32;
+        let f = self.tables.cut_factor(fh) as f32;
         // A cell with no corner in the box around the person grown by a pixel is background and
         // not near an edge: the output there stays background (all of it without a person).
         let Some(b) = PixelBox::around(labels, w, h, 1) else {

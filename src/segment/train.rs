@@ -191,6 +191,8 @@ pub fn train_segmenter(
     }
     let lut = ColourLut::new();
     let gate = MarkerGate::new(suit);
+    // The grid the tables are counted on (`downscale` rounds a frame's height down the same way).
+    let trained_rows = frames[0].image.height() / factor;
     let split = frames.len() - held_back;
     let counts = count(&frames[..split], factor, &lut, &gate);
     let warm_up = split.saturating_sub(2);
@@ -215,7 +217,7 @@ pub fn train_segmenter(
         if held_back == 0 {
             return 0.0;
         }
-        let tables = counts.finish(factor, weights);
+        let tables = counts.finish(factor, trained_rows, weights);
         let start = split - warm_up;
         variants
             .iter()
@@ -242,7 +244,7 @@ pub fn train_segmenter(
             }
         }
     }
-    let tables = count(frames, factor, &lut, &gate).finish(factor, weights);
+    let tables = count(frames, factor, &lut, &gate).finish(factor, trained_rows, weights);
     let report = TrainReport {
         frames: frames.len(),
         held_back,

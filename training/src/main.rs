@@ -47,7 +47,9 @@ enum Command {
         /// Of those, the last N are held back to choose the term weights.
         #[arg(long, default_value_t = 6)]
         held_back: usize,
-        /// The cut runs on frames box-downscaled by this factor.
+        /// The cut runs on frames box-downscaled by this factor (taller frames at run time may be
+        /// cut at a larger one that keeps at least 1.5 times the rows of the grid trained on; see
+        /// `SegmenterTables::cut_factor`).
         #[arg(long, default_value_t = 2)]
         downscale: u32,
     },
