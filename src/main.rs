@@ -478,6 +478,8 @@ fn segment(
     let mut scored: Vec<(suitcap::mask::Agreement, String)> = Vec::new();
     let (mut cleaned_frames, mut removed_px, mut filled_px, mut empty_frames) =
         (0usize, 0usize, 0usize, 0usize);
+    // The last frame's height, for the cut's factor in the summary.
+    let mut last_height = None;
     loop {
         let before = skipped.len();
         let Some(frame) = next_good_frame(source.as_mut(), &mut skipped, frames) else {
@@ -498,6 +500,7 @@ fn segment(
             }
         }
         let result = segmenter.segment(&frame.image);
+        last_height = Some(frame.image.height());
         times.push(result.times);
         if result.cleanup.components_removed + result.cleanup.holes_filled > 0 {
             cleaned_frames += 1;
@@ -521,9 +524,18 @@ fn segment(
         frames += 1;
     }
     println!("{frames} masks written to {}; {} corrupt frames skipped; {empty_frames} frames with nobody", out.display(), skipped.len());
+    let grid = match last_height {
+        Some(height) => format!(
+            "the cut's {}×{} grid, factor {}",
+            segmenter.graph().width(),
+            segmenter.graph().height(),
+            segmenter.tables().cut_factor(height)
+        ),
+        None => "the cut's resolution".to_owned(),
+    };
     println!(
         "clean-up (largest marker-carrying region kept, small holes filled) changed {cleaned_frames} frames: \
-         {removed_px} stray person pixels removed, {filled_px} hole pixels filled (at the cut's resolution)"
+         {removed_px} stray person pixels removed, {filled_px} hole pixels filled (on {grid})"
     );
     if !times.is_empty() {
         let stage_median =
