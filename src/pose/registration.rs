@@ -119,20 +119,7 @@ pub fn best_overlap(model: &Mask, target: &Mask, reach: i32) -> Option<(i32, i32
     let model = BitRows::new(model);
     let target = BitRows::new(target);
     let rows = model.set_rows()?;
-    let hits = |dx: i32, dy: i32| -> i64 {
-        let mut count = 0u32;
-        for y in rows.clone() {
-            let Some(target_row) = target.row(y as i32 + dy) else {
-                continue;
-            };
-            for (k, &word) in model.row(y as i32).unwrap_or(&[]).iter().enumerate() {
-                if word != 0 {
-                    count += (word & bits_from(target_row, 64 * k as i32 + dx)).count_ones();
-                }
-            }
-        }
-        count as i64
-    };
+    let hits = |dx: i32, dy: i32| overlap(&model, rows.clone(), &target, dx, dy) as i64;
     let better = |a: (i64, i32, i32), b: (i64, i32, i32)| {
         a.0 > b.0 || (a.0 == b.0 && a.1 * a.1 + a.2 * a.2 < b.1 * b.1 + b.2 * b.2)
     };
@@ -208,6 +195,29 @@ impl BitRows {
         let last = (0..self.height).rev().find(set)?;
         Some(first..last + 1)
     }
+}
+
+/// How many set cells of `model`'s `rows` land on set cells of `target` when shifted by (dx, dy):
+/// per row, the popcount of each model word AND the target's cells under it.
+fn overlap(
+    model: &BitRows,
+    rows: std::ops::Range<usize>,
+    target: &BitRows,
+    dx: i32,
+    dy: i32,
+) -> u32 {
+    let mut count = 0u32;
+    for y in rows {
+        let Some(target_row) = target.row(y as i32 + dy) else {
+            continue;
+        };
+        for (k, &word) in model.row(y as i32).unwrap_or(&[]).iter().enumerate() {
+            if word != 0 {
+                count += (word & bits_from(target_row, 64 * k as i32 + dx)).count_ones();
+            }
+        }
+    }
+    count
 }
 
 /// The 64 cells of `row` from column `start` on (bit i = cell start + i), zero where they fall
@@ -332,18 +342,7 @@ mod tests {
             let (model, target) = (mask(&model_seed), mask(&target_seed));
             let (bm, bt) = (BitRows::new(&model), BitRows::new(&target));
             for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (63, 1), (-64, -1), (65, 2), (-130, 0), (7, -3)] {
-                let rows = bm.set_rows().unwrap_or(0..0);
-                let by_bits: u32 = rows
-                    .map(|y| {
-                        let Some(t) = bt.row(y as i32 + dy) else { return 0 };
-                        bm.row(y as i32)
-                            .unwrap_or(&[])
-                            .iter()
-                            .enumerate()
-                            .map(|(k, &w)| (w & bits_from(t, 64 * k as i32 + dx)).count_ones())
-                            .sum()
-                    })
-                    .sum();
+                let by_bits = overlap(&bm, bm.set_rows().unwrap_or(0..0), &bt, dx, dy);
                 proptest::prop_assert_eq!(by_bits as usize, overlap_by_pixels(&model, &target, dx, dy));
             }
             if let Some((dx, dy)) = best_overlap(&model, &target, 4) {

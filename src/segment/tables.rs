@@ -419,22 +419,20 @@ impl SegmenterTables {
                 .map(<[f32]>::to_vec)
                 .collect())
         };
-        let downscale = m.array(&path, "downscale", &[1])?[0];
-        if !(1.0..=8.0).contains(&downscale) || downscale.fract() != 0.0 {
-            return Err(ModelError::Array {
-                path,
-                name: "downscale".into(),
-                message: format!("{downscale} is not an integer in 1..=8"),
-            });
-        }
-        let trained_rows = m.array(&path, "trained_rows", &[1])?[0];
-        if !(1.0..=65_535.0).contains(&trained_rows) || trained_rows.fract() != 0.0 {
-            return Err(ModelError::Array {
-                path,
-                name: "trained_rows".into(),
-                message: format!("{trained_rows} is not an integer in 1..=65535"),
-            });
-        }
+        // A single whole number in 1..=max.
+        let whole = |name: &str, max: u32| -> Result<u32, ModelError> {
+            let v = m.array(&path, name, &[1])?[0];
+            if !(1.0..=max as f32).contains(&v) || v.fract() != 0.0 {
+                return Err(ModelError::Array {
+                    path: path.clone(),
+                    name: name.into(),
+                    message: format!("{v} is not an integer in 1..={max}"),
+                });
+            }
+            Ok(v as u32)
+        };
+        let downscale = whole("downscale", 8)?;
+        let trained_rows = whole("trained_rows", 65_535)?;
         let two = |v: Vec<Vec<f32>>| -> [Vec<f32>; 2] {
             let mut it = v.into_iter();
             [it.next().unwrap_or_default(), it.next().unwrap_or_default()]
@@ -455,8 +453,8 @@ impl SegmenterTables {
         part_prior.copy_from_slice(m.array(&path, "part_prior", &[2])?);
         let part = m.array(&path, "part", &[COLOUR_BINS])?.to_vec();
         Ok(SegmenterTables {
-            downscale: downscale as u32,
-            trained_rows: trained_rows as u32,
+            downscale,
+            trained_rows,
             colour: two(split("colour", 2, COLOUR_TABLE)?),
             prior,
             neighbourhood: four(split("neighbourhood", 4, CONTRAST_BINS)?),
