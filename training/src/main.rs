@@ -105,8 +105,8 @@ enum Command {
     },
     /// The source paper's experiments on one trained suit's segmenter and codebooks: regressors for
     /// the FC, HOG, FC+HOG(+box) and silhouette descriptors with S candidate basis functions each,
-    /// trained on --train and measured on --data (segmenter masks). Writes OUT/experiments.csv and a
-    /// bar chart OUT/experiments.svg.
+    /// trained on --train (on the suit's segmenter masks unless `--masks truth`) and measured on
+    /// --data (segmenter masks). Writes OUT/experiments.csv and a bar chart OUT/experiments.svg.
     Experiments {
         #[arg(long)]
         suit: PathBuf,
@@ -120,6 +120,10 @@ enum Command {
         out: PathBuf,
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Masks the regressors' training descriptors are computed with, as for `suit`:
+        /// `segmenter` (default, as the shipped suit is trained) or `truth`.
+        #[arg(long, default_value = "segmenter")]
+        masks: String,
     },
     /// Joint-angle error of a trained suit on datasets with ground truth.
     Eval {
@@ -361,6 +365,15 @@ fn training_set(
     Ok((x, y, n))
 }
 
+/// Whether `--masks` asks for the suit's segmenter (`segmenter`) or the datasets' masks (`truth`).
+fn uses_segmenter_masks(masks: &str) -> anyhow::Result<bool> {
+    match masks {
+        "segmenter" => Ok(true),
+        "truth" => Ok(false),
+        other => bail!("--masks '{other}': expected segmenter or truth"),
+    }
+}
+
 /// Mean absolute angle error (degrees) of predictions for `x` against pose vectors `y`, over every
 /// (sin, cos) pair (the root offset and depth are left out).
 fn pose_vector_error(rvm: &suitcap::pose::rvm::Rvm, x: &[f32], y: &[f32], outputs: usize) -> f64 {
@@ -524,11 +537,7 @@ fn train_suit(
 ) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap::pose::regressor::Regressor;
-    let use_segmenter = match masks {
-        "segmenter" => true,
-        "truth" => false,
-        other => bail!("--masks '{other}': expected segmenter or truth"),
-    };
+    let use_segmenter = uses_segmenter_masks(masks)?;
     let started = std::time::Instant::now();
     let mut kind = DescriptorKind::parse(descriptor)
         .with_context(|| format!("--descriptor '{descriptor}'"))?;
@@ -902,11 +911,17 @@ fn experiments(
     bases: &[usize],
     out: &Path,
     seed: u64,
+    masks: &str,
 ) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap::pose::regressor::Regressor;
     let suit = SuitDefinition::load_dir(suit_dir)?;
     let codebooks = Codebooks::load(suit_dir)?;
+    let tables = if uses_segmenter_masks(masks)? {
+        Some(suitcap::segment::SegmenterTables::load(suit_dir)?)
+    } else {
+        None
+    };
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let template_data = Dataset::open(train.first().context("no --train")?)?;
     let template = suitcap::bvh::Motion::new(
@@ -930,7 +945,7 @@ fn experiments(
         DescriptorKind::Silhouette,
     ] {
         println!("{}:", kind.name());
-        let set = TrainingData::collect(&suit, &codebooks, train, kind, None)?;
+        let set = TrainingData::collect(&suit, &codebooks, train, kind, tables.as_ref())?;
         let width = set.choose_width(512, seed)?;
         for &basis in bases {
             let (rvm, report) = set.fit(basis, width, seed)?;
@@ -1039,7 +1054,8 @@ fn main() -> ExitCode {
             basis,
             out,
             seed,
-        } => experiments(suit, train, data, basis, out, *seed),
+            masks,
+        } => experiments(suit, train, data, basis, out, *seed, masks),
         Command::Limits { suit, data, margin } => limits(suit, data, *margin),
         Command::Eval {
             suit,
