@@ -16,8 +16,9 @@ use crate::model::{ModelError, ModelFile};
 use crate::suit::SuitDefinition;
 
 pub const REGRESSOR_KIND: &str = "regressor";
-/// Version 2: the pose vector's depth is in metres (`pose::DEPTH_SCALE`).
-pub const REGRESSOR_VERSION: u32 = 2;
+/// Version 2: the pose vector's depth is in metres (`pose::DEPTH_SCALE`). Version 3: the full
+/// descriptor's box values are weighted by [`crate::descriptor::BOX_WEIGHT`].
+pub const REGRESSOR_VERSION: u32 = 3;
 pub const REGRESSOR_FILE: &str = "regressor.bin";
 pub const SKELETON_FILE: &str = "skeleton.bvh";
 

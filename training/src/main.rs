@@ -80,7 +80,7 @@ enum Command {
         /// fc+hog (default, with the silhouette box: 304 values), fc, hog, or silhouette.
         #[arg(long, default_value = "fc+hog")]
         descriptor: String,
-        /// Kernel width; default: chosen on held-back datasets (every fifth) among ¼, ½, 1 and 2 × the median distance.
+        /// Kernel width; default: chosen on held-back motions (every fifth clip, all its renderings) among ¼, ½, 1 and 2 × the median distance.
         #[arg(long)]
         width: Option<f32>,
         #[arg(long, default_value_t = 1)]
@@ -394,17 +394,36 @@ fn pose_vector_error(rvm: &suitcap::pose::rvm::Rvm, x: &[f32], y: &[f32], output
     total / count.max(1) as f64
 }
 
-/// Whether frame `frame` of dataset `dataset` (of `datasets`) is held back to choose the kernel
-/// width: with five or more datasets every fifth *dataset* (whole motions, so that the width is
-/// chosen for motions the regressor has not seen, as at run time; neighbouring frames of one clip
-/// are nearly the same pose, and every tenth frame held back rewarded memorising them: held-back
-/// error 3.8° for a regressor making about 11° on novel motions), with fewer every tenth frame.
-fn held_back(dataset: usize, datasets: usize, frame: usize) -> bool {
-    if datasets >= 5 {
-        dataset % 5 == 4
+/// Whether frame `frame` of a dataset rendered from clip `clip` (of `clips` distinct clips, see
+/// [`clip_indices`]) is held back to choose the kernel width: with five or more clips every fifth
+/// *clip*, all its datasets (whole motions, so that the width is chosen for motions the regressor
+/// has not seen, as at run time; neighbouring frames of one clip are nearly the same pose, and
+/// every tenth frame held back rewarded memorising them: held-back error 3.8° for a regressor
+/// making about 11° on novel motions), with fewer every tenth frame.
+fn held_back(clip: usize, clips: usize, frame: usize) -> bool {
+    if clips >= 5 {
+        clip % 5 == 4
     } else {
         frame % 10 == 9
     }
+}
+
+/// For each dataset, the index of its source clip (the manifest's `clip.name`) in the order the
+/// clips first appear, and the number of distinct clips: two renderings of one motion (another
+/// subject, camera or room) are one motion, held back together or not at all.
+fn clip_indices(names: &[&str]) -> (Vec<usize>, usize) {
+    let mut seen: Vec<&str> = Vec::new();
+    let indices = names
+        .iter()
+        .map(|name| match seen.iter().position(|s| s == name) {
+            Some(i) => i,
+            None => {
+                seen.push(name);
+                seen.len() - 1
+            }
+        })
+        .collect();
+    (indices, seen.len())
 }
 
 /// Descriptors and pose vectors of training datasets, some held back ([`held_back`]).
@@ -434,9 +453,17 @@ impl TrainingData {
             dim,
             outputs: 0,
         };
-        for (d, dir) in data.iter().enumerate() {
-            let dataset = Dataset::open(dir)?;
-            let (x, y, n) = training_set(&dataset, suit, codebooks, kind, segmenter)?;
+        let datasets = data
+            .iter()
+            .map(|dir| Dataset::open(dir))
+            .collect::<Result<Vec<_>, _>>()?;
+        let names: Vec<&str> = datasets
+            .iter()
+            .map(|d| d.manifest.clip.name.as_str())
+            .collect();
+        let (clip_of, clips) = clip_indices(&names);
+        for (dataset, &clip) in datasets.iter().zip(&clip_of) {
+            let (x, y, n) = training_set(dataset, suit, codebooks, kind, segmenter)?;
             if n == 0 {
                 continue;
             }
@@ -446,7 +473,7 @@ impl TrainingData {
                 .zip(y.chunks_exact(set.outputs))
                 .enumerate()
             {
-                let (tx, ty) = if held_back(d, data.len(), k) {
+                let (tx, ty) = if held_back(clip, clips, k) {
                     (&mut set.held_x, &mut set.held_y)
                 } else {
                     (&mut set.x, &mut set.y)
@@ -1076,11 +1103,19 @@ fn main() -> ExitCode {
 
 #[cfg(test)]
 mod tests {
-    use super::held_back;
+    use super::{clip_indices, held_back};
 
     #[test]
-    fn whole_datasets_are_held_back_when_there_are_five_or_more() {
-        // 21 datasets: the 5th, 10th, 15th and 20th, every frame of them.
+    fn renderings_of_one_clip_share_its_index() {
+        let (indices, clips) = clip_indices(&["walk.bvh", "kick.bvh", "walk.bvh", "jump.bvh"]);
+        assert_eq!(indices, vec![0, 1, 0, 2]);
+        assert_eq!(clips, 3);
+        assert_eq!(clip_indices(&[]), (vec![], 0));
+    }
+
+    #[test]
+    fn whole_clips_are_held_back_when_there_are_five_or_more() {
+        // 21 clips: the 5th, 10th, 15th and 20th, every frame of them.
         let held: Vec<usize> = (0..21).filter(|&d| held_back(d, 21, 0)).collect();
         assert_eq!(held, vec![4, 9, 14, 19]);
         assert!((0..300).all(|k| held_back(9, 21, k) && !held_back(8, 21, k)));
