@@ -88,8 +88,8 @@ enum Command {
         /// Masks the regressor's training descriptors are computed with: `segmenter` (default: the
         /// suit's own segmenter run over each dataset as a stream, i.e. the masks it will see at run
         /// time, head, hands and leaks included) or `truth` (the datasets' masks).
-        #[arg(long, default_value = "segmenter")]
-        masks: String,
+        #[arg(long, value_enum, default_value_t = TrainingMasks::Segmenter)]
+        masks: TrainingMasks,
     },
     /// Learn the joint limits (per rotation channel, the range the training motions cover plus a
     /// margin) from mocap-aligned datasets or BVH clips; writes SUIT/joint_limits.toml.
@@ -122,8 +122,8 @@ enum Command {
         seed: u64,
         /// Masks the regressors' training descriptors are computed with, as for `suit`:
         /// `segmenter` (default, as the shipped suit is trained) or `truth`.
-        #[arg(long, default_value = "segmenter")]
-        masks: String,
+        #[arg(long, value_enum, default_value_t = TrainingMasks::Segmenter)]
+        masks: TrainingMasks,
     },
     /// Joint-angle error of a trained suit on datasets with ground truth.
     Eval {
@@ -365,12 +365,25 @@ fn training_set(
     Ok((x, y, n))
 }
 
-/// Whether `--masks` asks for the suit's segmenter (`segmenter`) or the datasets' masks (`truth`).
-fn uses_segmenter_masks(masks: &str) -> anyhow::Result<bool> {
-    match masks {
-        "segmenter" => Ok(true),
-        "truth" => Ok(false),
-        other => bail!("--masks '{other}': expected segmenter or truth"),
+/// Masks the regressor's training descriptors are computed with (`--masks`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum TrainingMasks {
+    /// The suit's own segmenter run over each dataset as a stream.
+    Segmenter,
+    /// The datasets' ground-truth masks.
+    Truth,
+}
+
+impl TrainingMasks {
+    /// The segmenter tables that make the masks; `None` for the datasets' own masks.
+    fn segmenter_tables(
+        self,
+        suit_dir: &Path,
+    ) -> anyhow::Result<Option<suitcap::segment::SegmenterTables>> {
+        Ok(match self {
+            TrainingMasks::Segmenter => Some(suitcap::segment::SegmenterTables::load(suit_dir)?),
+            TrainingMasks::Truth => None,
+        })
     }
 }
 
@@ -560,11 +573,10 @@ fn train_suit(
     descriptor: &str,
     width: Option<f32>,
     seed: u64,
-    masks: &str,
+    masks: TrainingMasks,
 ) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap::pose::regressor::Regressor;
-    let use_segmenter = uses_segmenter_masks(masks)?;
     let started = std::time::Instant::now();
     let mut kind = DescriptorKind::parse(descriptor)
         .with_context(|| format!("--descriptor '{descriptor}'"))?;
@@ -600,17 +612,12 @@ fn train_suit(
     println!(
         "stage 3/3: RVM regressor on the {} descriptor, {} masks",
         kind.name(),
-        if use_segmenter {
-            "segmenter"
-        } else {
-            "ground-truth"
+        match masks {
+            TrainingMasks::Segmenter => "segmenter",
+            TrainingMasks::Truth => "ground-truth",
         }
     );
-    let tables = if use_segmenter {
-        Some(suitcap::segment::SegmenterTables::load(suit_dir)?)
-    } else {
-        None
-    };
+    let tables = masks.segmenter_tables(suit_dir)?;
     let set = TrainingData::collect(&suit, &codebooks, data, kind, tables.as_ref())?;
     let total = set.frames();
     let width = match width {
@@ -938,17 +945,13 @@ fn experiments(
     bases: &[usize],
     out: &Path,
     seed: u64,
-    masks: &str,
+    masks: TrainingMasks,
 ) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap::pose::regressor::Regressor;
     let suit = SuitDefinition::load_dir(suit_dir)?;
     let codebooks = Codebooks::load(suit_dir)?;
-    let tables = if uses_segmenter_masks(masks)? {
-        Some(suitcap::segment::SegmenterTables::load(suit_dir)?)
-    } else {
-        None
-    };
+    let tables = masks.segmenter_tables(suit_dir)?;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let template_data = Dataset::open(train.first().context("no --train")?)?;
     let template = suitcap::bvh::Motion::new(
@@ -1073,7 +1076,7 @@ fn main() -> ExitCode {
             width,
             seed,
             masks,
-        } => train_suit(suit, data, *basis, descriptor, *width, *seed, masks),
+        } => train_suit(suit, data, *basis, descriptor, *width, *seed, *masks),
         Command::Experiments {
             suit,
             train,
@@ -1082,7 +1085,7 @@ fn main() -> ExitCode {
             out,
             seed,
             masks,
-        } => experiments(suit, train, data, basis, out, *seed, masks),
+        } => experiments(suit, train, data, basis, out, *seed, *masks),
         Command::Limits { suit, data, margin } => limits(suit, data, *margin),
         Command::Eval {
             suit,
