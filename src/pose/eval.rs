@@ -1,6 +1,8 @@
 //! Pose error measures: per joint, the mean absolute difference of its three Euler angles wrapped to
 //! ±180° (the source paper's measure) and the geodesic angle between the two rotations (which does not
-//! depend on how a rotation is split into Euler angles).
+//! depend on how a rotation is split into Euler angles); and how well training motions cover a test
+//! motion ([`nearest_pose_errors`]): the error that picking the closest training pose every time,
+//! knowing the truth, would still make.
 
 use super::{compose, PoseLayout};
 
@@ -93,6 +95,62 @@ impl JointErrors {
     }
 }
 
+/// The Euler angles (degrees, each joint's channel order, wrapped to ±180°) of the suit's joints
+/// after the root in each of `frames`, `frames × (J − 1)` triples. The root is left out: its
+/// rotation relative to the camera depends on where the camera stands, not on the motion.
+pub fn body_angles<'a>(
+    layout: &PoseLayout,
+    frames: impl Iterator<Item = &'a [f32]>,
+) -> Vec<[f32; 3]> {
+    frames
+        .flat_map(|frame| {
+            layout.joints[1..]
+                .iter()
+                .map(|(_, channels)| channels.map(|c| wrap_degrees(frame[c])))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// For each pose of `query` (`joints` triples from [`body_angles`]), the paper's error measure
+/// (mean over joints and angles of the wrapped absolute difference) to the closest pose of
+/// `reference`: how far the nearest training pose is. A regressor can blend training poses, so
+/// this is no bound, but a test motion whose poses are far from every training pose asks it to
+/// extrapolate. `None` when `reference` is empty.
+pub fn nearest_pose_errors(
+    reference: &[[f32; 3]],
+    query: &[[f32; 3]],
+    joints: usize,
+) -> Option<Vec<f32>> {
+    use rayon::prelude::*;
+    if reference.is_empty() || joints == 0 {
+        return None;
+    }
+    let angle = |a: f32, b: f32| {
+        let d = (a - b).abs();
+        d.min(360.0 - d)
+    };
+    Some(
+        query
+            .par_chunks_exact(joints)
+            .map(|q| {
+                let mut best = f32::INFINITY;
+                for r in reference.chunks_exact(joints) {
+                    let mut sum = 0.0;
+                    for (a, b) in q.iter().zip(r) {
+                        sum += angle(a[0], b[0]) + angle(a[1], b[1]) + angle(a[2], b[2]);
+                        if sum >= best {
+                            break;
+                        }
+                    }
+                    best = best.min(sum);
+                }
+                best / (3 * joints) as f32
+            })
+            .collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -131,5 +189,66 @@ mod tests {
         assert!((e.euler(1) - 20.0 / 3.0).abs() < 1e-4);
         assert!((e.geodesic(1) - 20.0).abs() < 1e-2);
         assert!((e.mean_euler() - 10.0 / 3.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn nearest_pose_across_the_wrap() {
+        // Two reference poses of two joints: A = (0, 0, 0), (10, 0, 0); B = (90, 0, 0), (90, 0, 0).
+        let reference = [
+            [0.0, 0.0, 0.0],
+            [10.0, 0.0, 0.0],
+            [90.0, 0.0, 0.0],
+            [90.0, 0.0, 0.0],
+        ];
+        let query = [
+            [0.0, 0.0, 0.0],
+            [10.0, 0.0, 0.0], // A itself: 0
+            [179.0, 0.0, 0.0],
+            [90.0, 0.0, 0.0], // B: 89 / 6; A: (179 + 80) / 6
+            [-179.0, 0.0, 0.0],
+            [-170.0, 0.0, 0.0], // A: (179 + 180) / 6; B across the wrap: (91 + 100) / 6
+        ];
+        let errors = nearest_pose_errors(&reference, &query, 2).expect("reference");
+        assert_eq!(errors.len(), 3);
+        assert_eq!(errors[0], 0.0);
+        assert!((errors[1] - 89.0 / 6.0).abs() < 1e-4);
+        assert!((errors[2] - 191.0 / 6.0).abs() < 1e-4);
+        assert_eq!(nearest_pose_errors(&[], &query, 2), None);
+    }
+
+    #[test]
+    fn body_angles_leave_out_the_root_and_wrap() {
+        let skeleton = crate::skeleton::tests::two_joint_arm();
+        let suit = crate::suit::SuitSkeleton {
+            joints: vec![
+                crate::suit::SuitJoint {
+                    name: "shoulder".into(),
+                    parent: None,
+                    bvh: "shoulder".into(),
+                },
+                crate::suit::SuitJoint {
+                    name: "elbow".into(),
+                    parent: Some(0),
+                    bvh: "elbow".into(),
+                },
+            ],
+        };
+        let layout = PoseLayout::new(&suit, &skeleton).expect("layout");
+        let frames = [
+            [0.0, 0.0, 0.0, 10.0, 20.0, 30.0, 350.0, 5.0, -5.0],
+            [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+        ];
+        let angles = body_angles(&layout, frames.iter().map(|f| &f[..]));
+        assert_eq!(angles, vec![[-10.0, 5.0, -5.0], [7.0, 8.0, 9.0]]);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn every_reference_pose_is_its_own_nearest(values in proptest::collection::vec(-180.0f32..180.0, 3 * 4 * 5), pick in 0usize..5) {
+            let poses: Vec<[f32; 3]> = values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            let query = &poses[4 * pick..4 * pick + 4];
+            let errors = nearest_pose_errors(&poses, query, 4).expect("reference");
+            proptest::prop_assert_eq!(errors, vec![0.0]);
+        }
     }
 }

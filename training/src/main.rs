@@ -125,6 +125,20 @@ enum Command {
         #[arg(long, value_enum, default_value_t = TrainingMasks::Segmenter)]
         masks: TrainingMasks,
     },
+    /// How well training motions cover test motions: for each frame of each --data motion, the
+    /// paper's error measure (the suit's joints but the root) to the closest pose of any --train
+    /// motion, i.e. the error of a regressor that picked the best training pose every time. Needs
+    /// no trained regressor, only the suit's joint list.
+    Coverage {
+        #[arg(long)]
+        suit: PathBuf,
+        /// Training motions: dataset directories (their motion.bvh) and/or BVH files.
+        #[arg(long, required = true, num_args = 1..)]
+        train: Vec<PathBuf>,
+        /// Test motions: dataset directories and/or BVH files.
+        #[arg(long, required = true, num_args = 1..)]
+        data: Vec<PathBuf>,
+    },
     /// Joint-angle error of a trained suit on datasets with ground truth.
     Eval {
         #[arg(long)]
@@ -682,7 +696,22 @@ fn train_suit(
 /// Learns `joint_limits.toml` from the motions of datasets (their `motion.bvh`) or BVH files.
 fn limits(suit_dir: &Path, data: &[PathBuf], margin: f32) -> anyhow::Result<()> {
     use suitcap::pose::smoothing::{JointLimits, JOINT_LIMITS_FILE};
-    let motions = data
+    let motions = load_motions(data)?;
+    let limits = JointLimits::learn(&motions, margin);
+    let path = suit_dir.join(JOINT_LIMITS_FILE);
+    limits.save(&path)?;
+    let frames: usize = motions.iter().map(|m| m.frame_count()).sum();
+    println!(
+        "joint limits from {} motions ({frames} frames, margin {margin}°) → {}",
+        motions.len(),
+        path.display()
+    );
+    Ok(())
+}
+
+/// The motions of dataset directories (their motion.bvh) or BVH files.
+fn load_motions(paths: &[PathBuf]) -> anyhow::Result<Vec<suitcap::bvh::Motion>> {
+    paths
         .iter()
         .map(|path| {
             let file = if path.is_dir() {
@@ -692,15 +721,56 @@ fn limits(suit_dir: &Path, data: &[PathBuf], margin: f32) -> anyhow::Result<()> 
             };
             Ok(suitcap::bvh::Motion::load(&file)?)
         })
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    let limits = JointLimits::learn(&motions, margin);
-    let path = suit_dir.join(JOINT_LIMITS_FILE);
-    limits.save(&path)?;
-    let frames: usize = motions.iter().map(|m| m.frame_count()).sum();
+        .collect()
+}
+
+/// Prints, per test motion, how far its poses are from the nearest training pose
+/// ([`suitcap::pose::eval::nearest_pose_errors`]).
+fn coverage(suit_dir: &Path, train: &[PathBuf], data: &[PathBuf]) -> anyhow::Result<()> {
+    use suitcap::pose::eval::{body_angles, nearest_pose_errors};
+    use suitcap::pose::PoseLayout;
+    let suit = SuitDefinition::load_dir(suit_dir)?;
+    let joints = suit.skeleton.joints.len().saturating_sub(1);
+    let angles_of = |path: &PathBuf, motion: &suitcap::bvh::Motion| {
+        let layout = PoseLayout::new(&suit.skeleton, &motion.skeleton)
+            .with_context(|| format!("{}: not the suit's skeleton", path.display()))?;
+        anyhow::Ok(body_angles(&layout, motion.frames()))
+    };
+    let mut reference = Vec::new();
+    for (path, motion) in train.iter().zip(load_motions(train)?) {
+        reference.extend(angles_of(path, &motion)?);
+    }
     println!(
-        "joint limits from {} motions ({frames} frames, margin {margin}°) → {}",
-        motions.len(),
-        path.display()
+        "{} training poses from {} motions; per test motion, the paper's error measure (the suit's {joints} joints after the root) to the nearest training pose:",
+        reference.len() / joints.max(1),
+        train.len()
+    );
+    let (mut sum, mut frames) = (0.0f64, 0usize);
+    for (path, motion) in data.iter().zip(load_motions(data)?) {
+        let query = angles_of(path, &motion)?;
+        let mut errors = nearest_pose_errors(&reference, &query, joints)
+            .context("no training poses in --train, or the suit has no joints after the root")?;
+        sum += errors.iter().map(|&e| e as f64).sum::<f64>();
+        frames += errors.len();
+        if errors.is_empty() {
+            println!("{}: no frames", path.display());
+            continue;
+        }
+        errors.sort_by(f32::total_cmp);
+        let at = |q: f64| errors[((errors.len() - 1) as f64 * q).round() as usize];
+        println!(
+            "{}: {} frames, nearest training pose off by {:.2}° on average (median {:.2}°, 90th percentile {:.2}°, worst {:.2}°)",
+            path.display(),
+            errors.len(),
+            errors.iter().sum::<f32>() / errors.len() as f32,
+            at(0.5),
+            at(0.9),
+            at(1.0)
+        );
+    }
+    println!(
+        "all {frames} frames: {:.2}° on average",
+        sum / frames.max(1) as f64
     );
     Ok(())
 }
@@ -1087,6 +1157,7 @@ fn main() -> ExitCode {
             masks,
         } => experiments(suit, train, data, basis, out, *seed, *masks),
         Command::Limits { suit, data, margin } => limits(suit, data, *margin),
+        Command::Coverage { suit, train, data } => coverage(suit, train, data),
         Command::Eval {
             suit,
             data,
