@@ -154,7 +154,17 @@ pub fn camera_for(
             ];
             match beside.into_iter().find(|p| p.is_file()) {
                 Some(p) => p,
-                None => suit_dir.join("camera.toml"),
+                None => {
+                    let in_suit = suit_dir.join("camera.toml");
+                    if !in_suit.is_file() {
+                        anyhow::bail!(
+                            "no camera calibration for {}: give --camera, or put camera.toml beside the input or in {}",
+                            input.display(),
+                            suit_dir.display()
+                        );
+                    }
+                    in_suit
+                }
             }
         }
     };
@@ -365,6 +375,9 @@ pub fn run(
     garment: &GarmentArgs,
     pose: &PoseArgs,
 ) -> anyhow::Result<()> {
+    if !Path::new(input).exists() {
+        anyhow::bail!("{input}: no such frame directory or .y4m file");
+    }
     let camera = camera_for(input, suit_dir, camera)?;
     let pose_stage = pose_stage(suit_dir, pose)?;
     let mode = if garment.live_cloth {
@@ -906,7 +919,10 @@ pub fn live(
                             let path = numbered(&base, takes_written.len());
                             match Take::new_for(&template_pipeline_skeleton, rate, path) {
                                 Ok(take) => recording = Some(take),
-                                Err(e) => eprintln!("cannot start recording: {e:#}"),
+                                Err(e) => eprintln!(
+                                    "cannot start recording: {}",
+                                    suitcap::io::error_line(e.as_ref())
+                                ),
                             }
                         }
                     },

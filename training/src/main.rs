@@ -1169,7 +1169,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", suitcap::io::error_line(e.as_ref()));
             ExitCode::FAILURE
         }
     }

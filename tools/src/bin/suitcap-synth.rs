@@ -125,7 +125,7 @@ fn main() -> ExitCode {
     match run(Args::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", suitcap::io::error_line(e.as_ref()));
             ExitCode::FAILURE
         }
     }
