@@ -155,6 +155,20 @@ pub fn nearest_pose_errors(
 mod tests {
     use super::*;
 
+    /// The pose layout of a shoulder and an elbow (the two-joint arm's BVH), three channels each.
+    fn two_joint_layout() -> PoseLayout {
+        let skeleton = crate::skeleton::tests::two_joint_arm();
+        let joint = |name: &str, parent| crate::suit::SuitJoint {
+            name: name.into(),
+            parent,
+            bvh: name.into(),
+        };
+        let suit = crate::suit::SuitSkeleton {
+            joints: vec![joint("shoulder", None), joint("elbow", Some(0))],
+        };
+        PoseLayout::new(&suit, &skeleton).expect("layout")
+    }
+
     #[test]
     fn wrapping() {
         assert_eq!(wrap_degrees(350.0), -10.0);
@@ -164,22 +178,7 @@ mod tests {
 
     #[test]
     fn a_known_error_on_a_two_joint_skeleton() {
-        let skeleton = crate::skeleton::tests::two_joint_arm();
-        let suit = crate::suit::SuitSkeleton {
-            joints: vec![
-                crate::suit::SuitJoint {
-                    name: "shoulder".into(),
-                    parent: None,
-                    bvh: "shoulder".into(),
-                },
-                crate::suit::SuitJoint {
-                    name: "elbow".into(),
-                    parent: Some(0),
-                    bvh: "elbow".into(),
-                },
-            ],
-        };
-        let layout = PoseLayout::new(&suit, &skeleton).expect("layout");
+        let layout = two_joint_layout();
         let truth = [0.0, 0.0, 0.0, 10.0, 0.0, 0.0, 350.0, 0.0, 0.0];
         // The elbow's Z angle is off by 20° across the wrap (350° vs 10°); the shoulder is exact.
         let estimate = [5.0, 0.0, 0.0, 10.0, 0.0, 0.0, 10.0, 0.0, 0.0];
@@ -218,22 +217,7 @@ mod tests {
 
     #[test]
     fn body_angles_leave_out_the_root_and_wrap() {
-        let skeleton = crate::skeleton::tests::two_joint_arm();
-        let suit = crate::suit::SuitSkeleton {
-            joints: vec![
-                crate::suit::SuitJoint {
-                    name: "shoulder".into(),
-                    parent: None,
-                    bvh: "shoulder".into(),
-                },
-                crate::suit::SuitJoint {
-                    name: "elbow".into(),
-                    parent: Some(0),
-                    bvh: "elbow".into(),
-                },
-            ],
-        };
-        let layout = PoseLayout::new(&suit, &skeleton).expect("layout");
+        let layout = two_joint_layout();
         let frames = [
             [0.0, 0.0, 0.0, 10.0, 20.0, 30.0, 350.0, 5.0, -5.0],
             [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
