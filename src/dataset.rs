@@ -12,8 +12,11 @@
 //! ```
 //!
 //! `manifest.toml` is written after everything else, so a directory without it is an incomplete
-//! dataset and [`Dataset::open`] refuses it. A recorded (real) dataset has the same layout; its
-//! `markers.csv` may be absent and its masks may cover only the frames that were labelled by hand.
+//! dataset and [`Dataset::open`] refuses it. A recorded (real) dataset has the same layout
+//! (`suitcap-train import` makes one from a video, the BVH captured with it and the camera's
+//! calibration): its manifest has a `[recording]` table instead of the generator's `seed`,
+//! `[subject]` and `[scene]`, its `markers.csv` is absent and its masks may cover only the frames
+//! that were labelled by hand. [`mocap_frame_at`] pairs a video frame with its mocap frame.
 
 use std::path::{Path, PathBuf};
 
@@ -38,11 +41,36 @@ pub struct Manifest {
     pub fps: f64,
     pub width: u32,
     pub height: u32,
-    pub seed: u64,
+    /// The generator's seed (generated datasets only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
     pub clip: ClipInfo,
-    pub subject: SubjectInfo,
+    /// The generated person's proportions (generated datasets only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub subject: Option<SubjectInfo>,
     pub suit: SuitInfo,
-    pub scene: SceneInfo,
+    /// The rendering conditions (generated datasets only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene: Option<SceneInfo>,
+    /// Where a recorded dataset's video came from and how the mocap was aligned to it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recording: Option<RecordingInfo>,
+}
+
+/// A recorded dataset's video and its alignment with the motion capture.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordingInfo {
+    /// The video (frame directory or `.y4m`) as given to the import.
+    pub video: String,
+    /// Who wore the suit.
+    pub performer: String,
+    /// The video frame that became dataset frame 0 (earlier ones had no mocap).
+    pub first_video_frame: usize,
+    /// Mocap time (seconds from the BVH's first frame) at which the video's frame 0 was taken.
+    pub mocap_offset_s: f64,
+    /// How many dataset frames have a hand-made mask in `masks/`.
+    pub masks: usize,
 }
 
 /// Where the ground-truth motion came from.
@@ -148,6 +176,40 @@ pub enum DatasetError {
     },
     #[error("{path}: {message}")]
     Mismatch { path: PathBuf, message: String },
+    #[error("{path} already holds a dataset; pass --overwrite to replace it")]
+    Exists { path: PathBuf },
+    #[error("{path}: cannot write: {source}")]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// Makes `out` ready for a new dataset: refuses one already there unless `overwrite` (its frames
+/// and masks then go), creates `frames/` and `masks/`, and removes an old manifest first, so that
+/// a writer interrupted from here on leaves an incomplete dataset.
+pub fn prepare_dataset_dir(out: &Path, overwrite: bool) -> Result<(), DatasetError> {
+    let write_error = |path: &Path| {
+        let path = path.to_owned();
+        move |source| DatasetError::Write { path, source }
+    };
+    let manifest = out.join("manifest.toml");
+    if manifest.exists() && !overwrite {
+        return Err(DatasetError::Exists {
+            path: out.to_owned(),
+        });
+    }
+    for sub in ["frames", "masks"] {
+        let dir = out.join(sub);
+        if dir.exists() && overwrite {
+            std::fs::remove_dir_all(&dir).map_err(write_error(&dir))?;
+        }
+        std::fs::create_dir_all(&dir).map_err(write_error(&dir))?;
+    }
+    if manifest.exists() {
+        std::fs::remove_file(&manifest).map_err(write_error(&manifest))?;
+    }
+    Ok(())
 }
 
 /// Path of frame `index` under `frames/`.
@@ -164,6 +226,15 @@ impl Manifest {
     pub fn to_toml(&self) -> String {
         let body = toml::to_string(self).unwrap_or_default();
         format!("# suitcap dataset manifest (format {DATASET_FORMAT}); see the `dataset` module docs.\n{body}")
+    }
+
+    /// Who is in the frames: the generated subject's name or the recording's performer.
+    pub fn performer(&self) -> &str {
+        match (&self.subject, &self.recording) {
+            (Some(subject), _) => &subject.name,
+            (None, Some(recording)) => &recording.performer,
+            (None, None) => "unknown",
+        }
     }
 
     pub fn load(path: &Path) -> Result<Manifest, DatasetError> {
@@ -188,6 +259,20 @@ impl Manifest {
                 path: path.to_owned(),
                 message: format!("field format: {} is not the dataset format this build reads ({DATASET_FORMAT})", manifest.format),
             });
+        }
+        if manifest.recording.is_none() {
+            for (field, present) in [
+                ("seed", manifest.seed.is_some()),
+                ("subject", manifest.subject.is_some()),
+                ("scene", manifest.scene.is_some()),
+            ] {
+                if !present {
+                    return Err(DatasetError::Manifest {
+                        path: path.to_owned(),
+                        message: format!("field {field}: missing (a generated dataset has seed, [subject] and [scene]; a recorded one has [recording])"),
+                    });
+                }
+            }
         }
         if manifest.clip.source_frames.len() != manifest.frames {
             return Err(DatasetError::Manifest {
@@ -274,6 +359,37 @@ pub fn markers_from_csv(text: &str, path: &Path) -> Result<Vec<MarkerRecord>, Da
         records.push(parsed.map_err(|m| error(i + 1, m))?);
     }
     Ok(records)
+}
+
+/// Where a video frame's time falls in a mocap take (see [`mocap_frame_at`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MocapTime {
+    /// Taken before the mocap's first frame.
+    Before,
+    /// The nearest mocap frame.
+    At(usize),
+    /// Taken after the mocap's last frame.
+    After,
+}
+
+/// The mocap frame shown by a video frame taken `video_time` seconds after the video's start, for
+/// a take of `frame_count` frames `frame_time` seconds apart whose time `offset_s` is the video's
+/// time 0: the nearest frame (not an interpolation, so the ground truth stays a recorded pose);
+/// more than half a frame before the first or after the last is outside the take.
+pub fn mocap_frame_at(
+    video_time: f64,
+    frame_time: f64,
+    frame_count: usize,
+    offset_s: f64,
+) -> MocapTime {
+    let s = ((video_time + offset_s) / frame_time).round();
+    if frame_count == 0 || s.is_nan() || s > (frame_count - 1) as f64 {
+        MocapTime::After
+    } else if s < 0.0 {
+        MocapTime::Before
+    } else {
+        MocapTime::At(s as usize)
+    }
 }
 
 /// An opened, checked dataset.
@@ -410,5 +526,81 @@ mod tests {
         let err = Dataset::open(dir.path()).unwrap_err();
         assert!(matches!(err, DatasetError::Incomplete { .. }), "{err}");
         assert!(err.to_string().contains("manifest.toml"));
+    }
+
+    #[test]
+    fn video_frames_get_the_nearest_mocap_frame() {
+        // Mocap at 100 Hz for 20 frames (0–0.19 s), video at 30 frames/s for 8 frames.
+        let at = |offset: f64| -> Vec<MocapTime> {
+            (0..8)
+                .map(|k| mocap_frame_at(k as f64 / 30.0, 0.01, 20, offset))
+                .collect()
+        };
+        use MocapTime::{After, At, Before};
+        // Video time 0 is mocap time 0.02 s: 0.02, 0.053, 0.087, 0.12, 0.153, 0.187 s → frames
+        // 2, 5, 9, 12, 15, 19; 0.22 and 0.253 s are past the take's end.
+        assert_eq!(
+            at(0.02),
+            [At(2), At(5), At(9), At(12), At(15), At(19), After, After]
+        );
+        // The mocap started 0.05 s after the video: video frames 0 (−0.05 s) and 1 (−0.017 s)
+        // have none; frame 2 (0.017 s) is mocap frame 2.
+        assert_eq!(
+            at(-0.05),
+            [Before, Before, At(2), At(5), At(8), At(12), At(15), At(18)]
+        );
+        // Within half a mocap frame of the start still counts.
+        assert_eq!(mocap_frame_at(0.0, 0.01, 20, -0.004), At(0));
+        assert_eq!(mocap_frame_at(0.0, 0.01, 0, 0.0), After);
+    }
+
+    #[test]
+    fn a_manifest_is_generated_or_recorded() {
+        let recorded = Manifest {
+            format: DATASET_FORMAT,
+            generator: "suitcap-train import".into(),
+            command: "suitcap-train import …".into(),
+            frames: 2,
+            fps: 30.0,
+            width: 64,
+            height: 48,
+            seed: None,
+            clip: ClipInfo {
+                name: "take.bvh".into(),
+                source_fps: 120.0,
+                start_frame: 3,
+                source_frames: vec![3, 7],
+            },
+            subject: None,
+            suit: SuitInfo {
+                name: "default".into(),
+                layout_seed: 7,
+                marker_size_cm: 4.0,
+                marker_gap_cm: 3.0,
+            },
+            scene: None,
+            recording: Some(RecordingInfo {
+                video: "rec/".into(),
+                performer: "ana".into(),
+                first_video_frame: 1,
+                mocap_offset_s: -0.01,
+                masks: 0,
+            }),
+        };
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("manifest.toml");
+        std::fs::write(&path, recorded.to_toml()).expect("write");
+        let loaded = Manifest::load(&path).expect("a recorded manifest loads");
+        assert_eq!(loaded, recorded);
+        assert_eq!(loaded.performer(), "ana");
+        // Without [recording] it must be a generated one, with seed, subject and scene.
+        let text = recorded.to_toml();
+        let cut = text.find("[recording]").expect("table");
+        std::fs::write(&path, &text[..cut]).expect("write");
+        let err = Manifest::load(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("manifest.toml") && err.contains("field seed"),
+            "{err}"
+        );
     }
 }

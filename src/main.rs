@@ -16,7 +16,7 @@ use clap::{Parser, Subcommand};
 
 use suitcap::mask::Mask;
 use suitcap::segment::{Segmenter, SegmenterOptions, SegmenterTables, StageTimes};
-use suitcap::source::directory::list_frame_files;
+use suitcap::source::directory::png_names_of_frames;
 use suitcap::source::{open_source, SourceError, SourceOptions};
 use suitcap::suit::SuitDefinition;
 
@@ -62,7 +62,8 @@ enum SuitCommand {
 #[derive(Subcommand)]
 enum Command {
     /// Record frames from a camera (/dev/videoN or an index), a frame directory or a Y4M file into
-    /// numbered PNG frames. Corrupt input frames are skipped, counted and named.
+    /// numbered PNG frames, with each frame's time in timestamps.csv. Corrupt input frames are
+    /// skipped, counted and named.
     Capture {
         /// /dev/videoN, a camera index, a directory of numbered frames, or a .y4m file.
         input: String,
@@ -241,8 +242,17 @@ fn capture(
         fps,
         ..SourceOptions::default()
     };
+    use std::io::Write;
+    use suitcap::source::directory::{timestamps_line, TIMESTAMPS_FILE, TIMESTAMPS_HEADER};
     let mut source = open_source(input, &options)?;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    // Each frame's time from the source's clock, a line per frame as it is written (unbuffered:
+    // a camera is stopped with Ctrl-C), so that a dropped frame leaves a gap in time that the
+    // frame directory's reader and `suitcap-train import` see.
+    let times_path = out.join(TIMESTAMPS_FILE);
+    let mut times = std::fs::File::create(&times_path)
+        .and_then(|mut f| writeln!(f, "{TIMESTAMPS_HEADER}").map(|()| f))
+        .with_context(|| format!("cannot write {}", times_path.display()))?;
     eprintln!("capturing from {}", source.describe());
     let started = Instant::now();
     let (mut written, mut skipped) = (0u64, Vec::new());
@@ -253,9 +263,13 @@ fn capture(
         match source.next_frame() {
             Ok(Some(frame)) => {
                 let extension = if jpeg.is_some() { "jpg" } else { "png" };
-                let path = out.join(format!("{written:06}.{extension}"));
+                let name = format!("{written:06}.{extension}");
+                let path = out.join(&name);
                 save_frame(&frame.image, &path, jpeg)
                     .with_context(|| format!("cannot write {}", path.display()))?;
+                times
+                    .write_all(timestamps_line(&name, frame.timestamp.as_secs_f64()).as_bytes())
+                    .with_context(|| format!("cannot write {}", times_path.display()))?;
                 written += 1;
             }
             Ok(None) => break,
@@ -394,7 +408,7 @@ fn check(suit: &Path, data: Option<&Path>) -> anyhow::Result<()> {
             dataset.manifest.width,
             dataset.manifest.height,
             dataset.manifest.fps,
-            dataset.manifest.subject.name,
+            dataset.manifest.performer(),
             dataset.manifest.clip.name
         );
     }
@@ -430,20 +444,7 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
     if !Path::new(input).is_dir() {
         return Ok(None);
     }
-    let files = list_frame_files(Path::new(input))?;
-    Ok(Some(
-        files
-            .iter()
-            .map(|f| {
-                format!(
-                    "{}.png",
-                    f.file_stem()
-                        .map(|s| s.to_string_lossy())
-                        .unwrap_or_default()
-                )
-            })
-            .collect(),
-    ))
+    Ok(Some(png_names_of_frames(Path::new(input))?))
 }
 
 fn segment(

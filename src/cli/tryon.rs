@@ -648,13 +648,14 @@ pub fn drape(
         .map(|d| d.join("manifest.toml"))
         .filter(|p| p.is_file())
         .and_then(|p| suitcap::dataset::Manifest::load(&p).ok())
+        .and_then(|manifest| manifest.subject)
     {
         println!(
             "  ground truth (generator's subject {}, nominal height {:.1} cm): the motion's own skeleton (scale 1.000, standing {:.1} cm with its limb ratios), girth {:.2}",
-            truth.subject.name,
-            truth.subject.height_cm,
+            truth.name,
+            truth.height_cm,
             suitcap::body_size::skeleton_height_cm(&template),
-            truth.subject.girth
+            truth.girth
         );
     }
     if garment.garment.eq_ignore_ascii_case("none") {

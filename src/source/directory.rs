@@ -3,7 +3,12 @@
 //! Files are ordered by natural sort of their names (`frame_2.png` before
 //! `frame_10.png`, `000001.png` before `000002.png`); files that are not
 //! `.png`, `.jpg` or `.jpeg` are ignored. Frame `i` is the `i`-th file in that
-//! order, stamped `i / fps`.
+//! order, stamped `i / fps` — or, when the directory holds a `timestamps.csv`
+//! ([`TIMESTAMPS_FILE`], which `suitcap capture` writes as it records: one
+//! `file,seconds` line per frame, the camera's own clock from the stream's
+//! start), stamped with its time, so a frame the camera dropped leaves a gap
+//! instead of shifting every later frame; the stream's rate is then the median
+//! interval's.
 //!
 //! The segmenter receives RGB frames that all have the first frame's size. A
 //! frame that cannot be read, is corrupt, or has another size gives an error
@@ -13,6 +18,7 @@
 use std::cmp::Ordering;
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use super::{timestamp_at_fps, Frame, FrameSource, SourceError};
 
@@ -24,6 +30,100 @@ pub struct DirectorySource {
     next: usize,
     size: (u32, u32),
     fps: f64,
+    /// Each file's time from `timestamps.csv`, in `files`' order.
+    times: Option<Vec<f64>>,
+}
+
+/// The capture times of a frame directory's files, beside them.
+pub const TIMESTAMPS_FILE: &str = "timestamps.csv";
+
+/// The header line of [`TIMESTAMPS_FILE`].
+pub const TIMESTAMPS_HEADER: &str = "file,seconds";
+
+/// One line of [`TIMESTAMPS_FILE`].
+pub fn timestamps_line(file_name: &str, seconds: f64) -> String {
+    format!("{file_name},{seconds:.6}\n")
+}
+
+/// Parses [`TIMESTAMPS_FILE`] text into (file name, seconds) pairs; errors name the line.
+pub fn parse_timestamps(text: &str, path: &Path) -> Result<Vec<(String, f64)>, SourceError> {
+    let error = |line: usize, reason: String| SourceError::Timestamps {
+        path: path.to_path_buf(),
+        line: Some(line),
+        reason,
+    };
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, header)) if header.trim() == TIMESTAMPS_HEADER => {}
+        _ => {
+            return Err(error(
+                1,
+                format!("expected the header '{TIMESTAMPS_HEADER}'"),
+            ))
+        }
+    }
+    let mut times = Vec::new();
+    for (i, line) in lines {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let Some((file, seconds)) = line.rsplit_once(',') else {
+            return Err(error(i + 1, "expected 'file,seconds'".into()));
+        };
+        let seconds: f64 = seconds
+            .trim()
+            .parse()
+            .ok()
+            .filter(|s: &f64| s.is_finite())
+            .ok_or_else(|| error(i + 1, format!("field seconds: '{seconds}' is not a time")))?;
+        times.push((file.trim().to_owned(), seconds));
+    }
+    Ok(times)
+}
+
+/// Each of `files`' time from the directory's [`TIMESTAMPS_FILE`]; `None` without one. Every
+/// frame file must be listed, and the times must increase in the files' order.
+fn read_times(dir: &Path, files: &[PathBuf]) -> Result<Option<Vec<f64>>, SourceError> {
+    let path = dir.join(TIMESTAMPS_FILE);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(source) => return Err(SourceError::Io { path, source }),
+    };
+    let mut listed = parse_timestamps(&text, &path)?;
+    listed.sort_by(|a, b| a.0.cmp(&b.0));
+    let mut times: Vec<f64> = Vec::with_capacity(files.len());
+    for file in files {
+        let name = file_name(file);
+        let Ok(k) = listed.binary_search_by(|(n, _)| n.as_str().cmp(&name)) else {
+            return Err(SourceError::Timestamps {
+                path,
+                line: None,
+                reason: format!("no time for frame file {name}"),
+            });
+        };
+        let t = listed[k].1;
+        if times.last().is_some_and(|&last| t <= last) {
+            return Err(SourceError::Timestamps {
+                path,
+                line: None,
+                reason: format!("{name}'s time {t} s is not after the frame before it"),
+            });
+        }
+        times.push(t);
+    }
+    Ok(Some(times))
+}
+
+/// The median interval's rate of increasing `times`; `None` for fewer than two.
+fn median_rate(times: &[f64]) -> Option<f64> {
+    let mut intervals: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    if intervals.is_empty() {
+        return None;
+    }
+    let middle = intervals.len() / 2;
+    let (_, median, _) = intervals.select_nth_unstable_by(middle, f64::total_cmp);
+    Some(1.0 / *median)
 }
 
 /// Whether the file name has a PNG or JPEG extension (case-insensitive).
@@ -103,6 +203,22 @@ pub fn list_frame_files(dir: &Path) -> Result<Vec<PathBuf>, SourceError> {
     Ok(files)
 }
 
+/// The name of a PNG written for each frame file of `dir` (a mask, say): the frame's file stem
+/// with `.png`, in the frames' order.
+pub fn png_names_of_frames(dir: &Path) -> Result<Vec<String>, SourceError> {
+    Ok(list_frame_files(dir)?
+        .iter()
+        .map(|f| {
+            format!(
+                "{}.png",
+                f.file_stem()
+                    .map(|s| s.to_string_lossy())
+                    .unwrap_or_default()
+            )
+        })
+        .collect())
+}
+
 fn file_name(path: &Path) -> String {
     path.file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -121,9 +237,12 @@ fn read_dimensions(path: &Path) -> Result<(u32, u32), String> {
 
 impl DirectorySource {
     /// Lists the frames of `dir`; the stream's size is that of the first frame
-    /// whose header can be read. `fps` sets the timestamps (index / fps).
+    /// whose header can be read. The timestamps come from the directory's
+    /// `timestamps.csv` if it has one, else from `fps` (index / fps).
     pub fn open(dir: &Path, fps: f64) -> Result<Self, SourceError> {
         let files = list_frame_files(dir)?;
+        let times = read_times(dir, &files)?;
+        let fps = times.as_deref().and_then(median_rate).unwrap_or(fps);
         if files.is_empty() {
             return Err(SourceError::EmptyDirectory {
                 path: dir.to_path_buf(),
@@ -161,6 +280,7 @@ impl DirectorySource {
             next: 0,
             size,
             fps,
+            times,
         })
     }
 
@@ -213,7 +333,10 @@ impl FrameSource for DirectorySource {
         let image = self.load(index)?;
         Ok(Some(Frame {
             index: index as u64,
-            timestamp: timestamp_at_fps(index as u64, self.fps),
+            timestamp: match &self.times {
+                Some(times) => Duration::from_secs_f64(times[index].max(0.0)),
+                None => timestamp_at_fps(index as u64, self.fps),
+            },
             image,
         }))
     }
@@ -303,6 +426,48 @@ mod tests {
             ]
         );
         assert!(src.next_frame().unwrap().is_none());
+    }
+
+    #[test]
+    fn timestamps_csv_gives_each_frame_its_capture_time() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["000000.png", "000001.png", "000002.png", "000003.png"] {
+            write_png(dir.path(), name, 4, 3, [9, 9, 9]);
+        }
+        // The camera dropped a frame between the second and the third.
+        let mut text = format!("{TIMESTAMPS_HEADER}\n");
+        for (name, t) in [
+            ("000000.png", 0.0),
+            ("000001.png", 0.04),
+            ("000002.png", 0.12),
+            ("000003.png", 0.16),
+        ] {
+            text += &timestamps_line(name, t);
+        }
+        std::fs::write(dir.path().join(TIMESTAMPS_FILE), &text).unwrap();
+        let mut src = DirectorySource::open(dir.path(), 30.0).unwrap();
+        // The median interval, 40 ms, not the 30 frames/s assumed without the file.
+        assert!((src.frame_rate().unwrap() - 25.0).abs() < 1e-9);
+        let times: Vec<u128> = std::iter::from_fn(|| src.next_frame().unwrap())
+            .map(|f| f.timestamp.as_millis())
+            .collect();
+        assert_eq!(times, vec![0, 40, 120, 160]);
+
+        // A frame file the file does not list, a time going back, a bad field: named errors.
+        let short = text.lines().take(4).collect::<Vec<_>>().join("\n");
+        let back = text.replace("000002.png,0.120000", "000002.png,0.010000");
+        let bad = text.replace("0.040000", "soon");
+        for (broken, named) in [
+            (short, ["timestamps.csv", "000003.png"]),
+            (back, ["000002.png", "not after"]),
+            (bad, ["line 3", "seconds"]),
+        ] {
+            std::fs::write(dir.path().join(TIMESTAMPS_FILE), broken).unwrap();
+            let err = DirectorySource::open(dir.path(), 30.0)
+                .unwrap_err()
+                .to_string();
+            assert!(named.iter().all(|n| err.contains(n)), "{err}");
+        }
     }
 
     #[test]

@@ -129,6 +129,12 @@ pub enum SourceError {
     Unsupported { path: PathBuf, reason: String },
     #[error("{}: no PNG or JPEG frames in directory", path.display())]
     EmptyDirectory { path: PathBuf },
+    #[error("{}: {}{reason}", path.display(), line.map(|l| format!("line {l}: ")).unwrap_or_default())]
+    Timestamps {
+        path: PathBuf,
+        line: Option<usize>,
+        reason: String,
+    },
     #[error("{}: frame {index} is {}x{}, but the stream is {}x{}",
         path.display(), got.0, got.1, expected.0, expected.1)]
     SizeMismatch {

@@ -54,6 +54,29 @@ pub struct SynthOptions {
     pub command: String,
 }
 
+impl SynthOptions {
+    /// `bvh` rendered into `out` in the suit of `suit_dir` over `backgrounds`, the rest as the
+    /// command line's defaults: from clip frame 12, every frame, 30 frames/s, 640×480, the subject
+    /// chosen by the seed, seed 1, an existing dataset not replaced.
+    pub fn new(bvh: PathBuf, out: PathBuf, suit_dir: PathBuf, backgrounds: Vec<PathBuf>) -> Self {
+        SynthOptions {
+            bvh,
+            out,
+            start_frame: 12,
+            frames: None,
+            fps: 30.0,
+            width: 640,
+            height: 480,
+            subject: None,
+            backgrounds,
+            suit_dir,
+            seed: 1,
+            overwrite: false,
+            command: String::new(),
+        }
+    }
+}
+
 /// What a run produced.
 #[derive(Clone, Debug)]
 pub struct Summary {
@@ -350,26 +373,7 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
 
     // Output directory: an old manifest goes first, so an interrupted run leaves an incomplete dataset.
     let out = &options.out;
-    let manifest_path = out.join("manifest.toml");
-    if manifest_path.exists() && !options.overwrite {
-        bail!(
-            "{} already holds a dataset; pass --overwrite to replace it",
-            out.display()
-        );
-    }
-    for sub in ["frames", "masks"] {
-        let dir = out.join(sub);
-        if dir.exists() && options.overwrite {
-            std::fs::remove_dir_all(&dir)
-                .with_context(|| format!("cannot clear {}", dir.display()))?;
-        }
-        std::fs::create_dir_all(&dir)
-            .with_context(|| format!("cannot create {}", dir.display()))?;
-    }
-    if manifest_path.exists() {
-        std::fs::remove_file(&manifest_path)
-            .with_context(|| format!("cannot remove {}", manifest_path.display()))?;
-    }
+    suitcap::dataset::prepare_dataset_dir(out, options.overwrite)?;
 
     // Render every frame in parallel.
     let renderer = BodyRenderer::new(&suit, subject, &body, scene.camera);
@@ -458,7 +462,7 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
         fps: options.fps,
         width: w,
         height: h,
-        seed: options.seed,
+        seed: Some(options.seed),
         clip: ClipInfo {
             name: options
                 .bvh
@@ -469,20 +473,20 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
             start_frame: options.start_frame,
             source_frames,
         },
-        subject: SubjectInfo {
+        subject: Some(SubjectInfo {
             name: subject.name.to_owned(),
             height_cm: subject.height_cm,
             girth: subject.girth,
             arm_ratio: subject.arm_ratio,
             leg_ratio: subject.leg_ratio,
-        },
+        }),
         suit: SuitInfo {
             name: suit.name.clone(),
             layout_seed: suit.layout_seed,
             marker_size_cm: suit.marker_size_cm,
             marker_gap_cm: suit.marker_gap_cm,
         },
-        scene: SceneInfo {
+        scene: Some(SceneInfo {
             backgrounds: background_names,
             background_is_video,
             horizontal_fov_deg: scene.horizontal_fov_deg,
@@ -495,7 +499,8 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
             shot_noise: scene.shot_noise,
             blur_sigma: scene.blur_sigma,
             clutter_objects: clutter.len(),
-        },
+        }),
+        recording: None,
     };
     write("manifest.toml", manifest.to_toml().as_bytes())?;
 

@@ -11,19 +11,16 @@ fn repo(path: &str) -> PathBuf {
 
 fn options(out: &Path, seed: u64) -> SynthOptions {
     SynthOptions {
-        bvh: repo("tests/data/mocap/cmu_02_01_walk.bvh"),
-        out: out.to_owned(),
-        start_frame: 12,
         frames: Some(6),
-        fps: 30.0,
         width: 160,
         height: 120,
-        subject: None,
-        backgrounds: vec![repo("tests/data/backgrounds")],
-        suit_dir: repo("suits/default"),
         seed,
-        overwrite: false,
-        command: "test".into(),
+        ..SynthOptions::new(
+            repo("tests/data/mocap/cmu_02_01_walk.bvh"),
+            out.to_owned(),
+            repo("suits/default"),
+            vec![repo("tests/data/backgrounds")],
+        )
     }
 }
 

@@ -4,7 +4,8 @@
 //! frames with masks of a dataset (the generator's format, `suitcap::dataset`); `codebooks` learns the
 //! Feature Context, HOG and silhouette codebooks by k-means over the datasets' local histograms;
 //! `suit` trains a whole suit (every stage the suit directory lacks, then the RVM pose regressor);
-//! `eval` measures a trained suit's joint-angle error on datasets with ground truth.
+//! `eval` measures a trained suit's joint-angle error on datasets with ground truth; `import` makes
+//! a dataset from a real recording and the mocap captured with it ([`import`]).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -17,6 +18,8 @@ use suitcap::mask::Mask;
 use suitcap::segment::{train_segmenter, TrainingFrame};
 use suitcap::stats::median;
 use suitcap::suit::SuitDefinition;
+
+mod import;
 
 #[derive(Parser)]
 #[command(
@@ -54,7 +57,8 @@ enum Command {
         downscale: u32,
     },
     /// Learn the FC (200), HOG (100) and silhouette (100) codebooks by k-means over the local
-    /// histograms of every frame of the datasets (ground-truth masks); writes SUIT/codebook_*.bin.
+    /// histograms of every frame of the datasets (their masks; a frame without one, as in a recording
+    /// labelled in part, gets the suit segmenter's); writes SUIT/codebook_*.bin.
     Codebooks {
         #[arg(long)]
         suit: PathBuf,
@@ -138,6 +142,46 @@ enum Command {
         /// Test motions: dataset directories and/or BVH files.
         #[arg(long, required = true, num_args = 1..)]
         data: Vec<PathBuf>,
+    },
+    /// Make a training dataset from a real recording: the video (a frame directory or a .y4m
+    /// file), the BVH captured with it and the camera's calibration, each video frame paired with
+    /// the mocap frame nearest its time; hand-made masks of some frames are copied with them.
+    /// The video before the mocap's start and after its end is left out.
+    Import {
+        /// The recording: a directory of frames (e.g. from `suitcap capture`) or a .y4m file.
+        #[arg(long)]
+        video: String,
+        /// The motion capture recorded with it.
+        #[arg(long)]
+        bvh: PathBuf,
+        /// The camera's calibration in the mocap's world frame.
+        #[arg(long)]
+        camera: PathBuf,
+        /// The suit worn (its joints must be in the BVH).
+        #[arg(long, default_value = "suits/default")]
+        suit: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// Mocap time (seconds from the BVH's first frame) at which the video's first frame was
+        /// taken; negative if the mocap started after the video.
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        offset: f64,
+        /// The video's frame rate, for a frame directory without timestamps.csv (frames then
+        /// evenly spaced) or a .y4m file without one in its header.
+        #[arg(long)]
+        fps: Option<f64>,
+        /// Hand-made masks named like the video's frames (NNNNNN.png for a .y4m file).
+        #[arg(long)]
+        masks: Option<PathBuf>,
+        /// Who wore the suit (kept in the manifest).
+        #[arg(long, default_value = "unknown")]
+        performer: String,
+        /// Import at most this many frames.
+        #[arg(long)]
+        max_frames: Option<usize>,
+        /// Replace a dataset already in OUT.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Joint-angle error of a trained suit on datasets with ground truth.
     Eval {
@@ -228,6 +272,58 @@ fn read_mask(dataset: &Dataset, index: usize) -> anyhow::Result<Mask> {
     Ok(Mask::from_gray(&mask))
 }
 
+/// The first frame of the first run of `length` consecutive frames that all have a mask.
+fn first_labelled_run(dataset: &Dataset, length: usize) -> Option<usize> {
+    let mut run = 0;
+    for index in 0..dataset.frame_count() {
+        run = if dataset.mask_path(index).is_file() {
+            run + 1
+        } else {
+            0
+        };
+        if run == length {
+            return Some(index + 1 - length);
+        }
+    }
+    None
+}
+
+/// For a dataset some of whose frames have no mask (a recording labelled by hand in part), the
+/// suit's segmenter's masks of those frames (it runs over the whole stream, as its motion and
+/// temporal terms need); empty when every frame has its mask.
+fn masks_for_unlabelled_frames(
+    suit_dir: &Path,
+    suit: &SuitDefinition,
+    dataset: &Dataset,
+) -> anyhow::Result<Vec<Option<Mask>>> {
+    let n = dataset.frame_count();
+    let unlabelled: Vec<bool> = (0..n).map(|i| !dataset.mask_path(i).is_file()).collect();
+    let missing = unlabelled.iter().filter(|&&u| u).count();
+    if missing == 0 {
+        return Ok(Vec::new());
+    }
+    let tables = suitcap::segment::SegmenterTables::load(suit_dir).with_context(|| {
+        format!(
+            "{}: {missing} of {n} frames have no mask (e.g. {}); their masks come from the suit's segmenter, which needs training first (suitcap-train segment)",
+            dataset.root.display(),
+            dataset
+                .mask_path(unlabelled.iter().position(|&u| u).unwrap_or(0))
+                .display()
+        )
+    })?;
+    let mut segmenter = suitcap::segment::Segmenter::new(
+        tables,
+        suit,
+        suitcap::segment::SegmenterOptions::default(),
+    );
+    (0..n)
+        .map(|index| {
+            let mask = segmenter.segment(&read_frame(dataset, index)?).mask;
+            Ok(unlabelled[index].then_some(mask))
+        })
+        .collect()
+}
+
 fn codebooks(
     suit_dir: &Path,
     data: &[PathBuf],
@@ -241,15 +337,24 @@ fn codebooks(
     let mut locals: Vec<LocalHistograms> = Vec::new();
     for dir in data {
         let dataset = Dataset::open(dir)?;
+        let segmented = masks_for_unlabelled_frames(suit_dir, &suit, &dataset)?;
         let bar = indicatif::ProgressBar::new(dataset.frame_count() as u64);
         let part = (0..dataset.frame_count())
             .into_par_iter()
             .map_init(
                 || Describer::new(&suit),
                 |describer, index| -> anyhow::Result<LocalHistograms> {
-                    let (image, mask) = frame_and_mask(&dataset, index)?;
+                    let image = read_frame(&dataset, index)?;
+                    let labelled;
+                    let mask = match segmented.get(index) {
+                        Some(Some(mask)) => mask,
+                        _ => {
+                            labelled = read_mask(&dataset, index)?;
+                            &labelled
+                        }
+                    };
                     bar.inc(1);
-                    Ok(describer.local_histograms(&image, &mask, None))
+                    Ok(describer.local_histograms(&image, mask, None))
                 },
             )
             .collect::<anyhow::Result<Vec<_>>>()?;
@@ -620,17 +725,35 @@ fn train_suit(
         kind = DescriptorKind::Full; // the paper's descriptor carries the silhouette box too
     }
     let suit = SuitDefinition::load_dir(suit_dir)?;
-    let first = data.first().context("no --data")?;
+    if data.is_empty() {
+        bail!("no --data");
+    }
     if !suit_dir
         .join(suitcap::segment::tables::SEGMENTER_FILE)
         .exists()
     {
+        // The first 20 consecutive frames with masks (a recording may be labelled anywhere).
+        const SEGMENTER_FRAMES: usize = 20;
+        let mut found = None;
+        for dir in data {
+            let dataset = Dataset::open(dir)?;
+            if let Some(start) = first_labelled_run(&dataset, SEGMENTER_FRAMES) {
+                found = Some((dir, start));
+                break;
+            }
+        }
+        let Some((dir, start)) = found else {
+            bail!(
+                "no dataset has {SEGMENTER_FRAMES} consecutive frames with masks (masks/NNNNNN.png) to train the segmenter from: label some, or train it with `suitcap-train segment`"
+            );
+        };
         println!(
-            "stage 1/3: segmenter (not in {}), from 20 frames of {}",
+            "stage 1/3: segmenter (not in {}), from frames {start}..{} of {}",
             suit_dir.display(),
-            first.display()
+            start + SEGMENTER_FRAMES,
+            dir.display()
         );
-        segment(suit_dir, first, 20, 0, 6, 2)?;
+        segment(suit_dir, dir, SEGMENTER_FRAMES, start, 6, 2)?;
     } else {
         println!("stage 1/3: segmenter present");
     }
@@ -661,7 +784,7 @@ fn train_suit(
         None => set.choose_width(basis, seed)?,
     };
     let (rvm, report) = set.fit(basis, width, seed)?;
-    let first_dataset = Dataset::open(first)?;
+    let first_dataset = Dataset::open(&data[0])?;
     let template = suitcap::bvh::Motion::new(
         first_dataset.motion.skeleton.clone(),
         first_dataset.motion.frame_time,
@@ -867,8 +990,13 @@ fn evaluate(
                 + dataset.motion.skeleton.joint(0).offset
         };
         for index in 0..dataset.frame_count() {
-            let (image, mask) = frame_and_mask(&dataset, index)?;
-            let result = pipeline.process(&image, &dataset.camera, truth_masks.then_some(&mask));
+            let image = read_frame(&dataset, index)?;
+            // The dataset's masks are read only when asked for: a recording may have few.
+            let truth = match truth_masks {
+                true => Some(read_mask(&dataset, index)?),
+                false => None,
+            };
+            let result = pipeline.process(&image, &dataset.camera, truth.as_ref());
             if !result.person {
                 missed += 1;
                 filters.iter_mut().for_each(PoseFilter::reset);
@@ -911,7 +1039,7 @@ fn evaluate(
                 dataset.frame_count(),
                 missed,
                 dataset.manifest.clip.name,
-                dataset.manifest.subject.name,
+                dataset.manifest.performer(),
                 errors.mean_euler(),
                 errors.mean_geodesic()
             );
@@ -1187,6 +1315,36 @@ fn main() -> ExitCode {
         } => experiments(suit, train, data, basis, out, *seed, *masks),
         Command::Limits { suit, data, margin } => limits(suit, data, *margin),
         Command::Coverage { suit, train, data } => coverage(suit, train, data),
+        Command::Import {
+            video,
+            bvh,
+            camera,
+            suit,
+            out,
+            offset,
+            fps,
+            masks,
+            performer,
+            max_frames,
+            overwrite,
+        } => {
+            let options = import::ImportOptions {
+                video,
+                bvh,
+                camera,
+                suit,
+                out,
+                offset_s: *offset,
+                fps: *fps,
+                masks: masks.as_deref(),
+                performer,
+                max_frames: *max_frames,
+                overwrite: *overwrite,
+                command: std::env::args().collect::<Vec<_>>().join(" "),
+            };
+            import::import(&options)
+                .map(|report| println!("{}", import::summary(&options, &report)))
+        }
         Command::Eval {
             suit,
             data,
@@ -1220,19 +1378,17 @@ mod tests {
         let tmp = tempfile::tempdir().expect("tempdir");
         let out = tmp.path().join("walk");
         let options = SynthOptions {
-            bvh: repo("tests/data/mocap/cmu_02_01_walk.bvh"),
-            out: out.clone(),
             start_frame: 20,
             frames: Some(3),
-            fps: 30.0,
             width: 320,
             height: 240,
-            subject: None,
-            backgrounds: vec![repo("tests/data/backgrounds")],
-            suit_dir: repo("suits/default"),
             seed: 5,
-            overwrite: false,
-            command: "test".into(),
+            ..SynthOptions::new(
+                repo("tests/data/mocap/cmu_02_01_walk.bvh"),
+                out.clone(),
+                repo("suits/default"),
+                vec![repo("tests/data/backgrounds")],
+            )
         };
         generate(&options, &|| {}).expect("dataset");
         let dataset = suitcap::dataset::Dataset::open(&out).expect("reopens");
