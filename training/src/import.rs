@@ -459,6 +459,40 @@ mod tests {
     }
 
     #[test]
+    fn a_y4m_recording_gives_its_own_rate_and_masks_by_frame_index() {
+        use suitcap::source::y4m::{Y4mChroma, Y4mWriter};
+        let r = Recording::new();
+        let tmp = &r.tmp;
+        // The video at 15 frames/s (444, so the frames come back nearly as rendered): video
+        // frame k is at k/15 s, i.e. mocap frame 2k of the 30 frames/s take.
+        let video = tmp.path().join("take.y4m");
+        let mut writer = Y4mWriter::create(&video, 160, 120, 15.0, Y4mChroma::C444).expect("y4m");
+        for k in 0..6 {
+            let frame = image::open(r.rec.frame_path(k)).expect("frame").to_rgb8();
+            writer.write_frame(&frame).expect("write");
+        }
+        writer.finish().expect("flush");
+        let masks = tmp.path().join("labelled");
+        std::fs::create_dir_all(&masks).expect("dir");
+        std::fs::copy(r.rec.mask_path(1), masks.join("000001.png")).expect("copy");
+        let out = tmp.path().join("y4m");
+        let video_name = video.display().to_string();
+        let mut o = r.options(&out);
+        o.video = &video_name;
+        o.fps = None;
+        o.masks = Some(&masks);
+        let report = import(&o).expect("imports");
+        // Video frames 0–2 are mocap frames 0, 2, 4; frame 3 (mocap 6) is past the take's end.
+        assert_eq!((report.frames, report.masks, report.fps), (3, 1, 15.0));
+        let imported = Dataset::open(&out).expect("a dataset");
+        assert_eq!(imported.manifest.clip.source_frames, vec![0, 2, 4]);
+        assert_eq!(imported.motion.frame(2), r.rec.motion.frame(4));
+        // BVH keeps the frame time to eight decimals.
+        assert!((imported.motion.frame_time - 1.0 / 15.0).abs() < 1e-7);
+        assert!(imported.mask_path(1).is_file() && !imported.mask_path(0).is_file());
+    }
+
+    #[test]
     fn what_cannot_be_imported_is_named() {
         let r = Recording::new();
         let tmp = &r.tmp;
