@@ -2,9 +2,9 @@
 //!
 //! A suit is trained on video recorded alongside motion capture. The recording arrives as a video
 //! (a frame directory, e.g. from `suitcap capture`, whose `timestamps.csv` gives each frame's
-//! capture time, or a `.y4m` file), the BVH the mocap system
-//! wrote, the camera's calibration in the mocap's world frame (`camera.toml`) and, for the
-//! segmenter's training, hand-made masks of some frames. [`import`] pairs every video frame with
+//! capture time, or a `.y4m` file), the BVH the mocap system wrote, the camera's calibration in
+//! the mocap's world frame (`camera.toml`) and, for the segmenter's training, hand-made masks of
+//! some frames. [`import`] pairs every video frame with
 //! the mocap frame nearest its time (the two clocks joined by one offset, the mocap time of the
 //! video's first frame: [`suitcap::dataset::mocap_frame_at`]), leaves out the video taken before
 //! the mocap started or after it ended, and writes the dataset layout of [`suitcap::dataset`]:
@@ -136,7 +136,8 @@ pub fn scan_offsets(
 }
 
 /// Segments the first frames of the imported dataset with the suit's segmenter and scans the clock
-/// offsets within a second of `o.offset_s`; `None` when the suit has no segmenter yet.
+/// offsets within a second of `o.offset_s`; `None` when the suit has no segmenter yet (a damaged
+/// one is an error).
 fn check_alignment(
     o: &ImportOptions,
     suit: &SuitDefinition,
@@ -144,9 +145,14 @@ fn check_alignment(
     camera: &Camera,
     video_times: &[f64],
 ) -> anyhow::Result<Option<AlignmentCheck>> {
-    let Ok(tables) = suitcap::segment::SegmenterTables::load(o.suit) else {
+    if !o
+        .suit
+        .join(suitcap::segment::tables::SEGMENTER_FILE)
+        .exists()
+    {
         return Ok(None);
-    };
+    }
+    let tables = suitcap::segment::SegmenterTables::load(o.suit)?;
     let joints = suit.skeleton.bind(&motion.skeleton)?;
     let mut segmenter = suitcap::segment::Segmenter::new(
         tables,

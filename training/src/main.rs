@@ -992,9 +992,10 @@ fn evaluate(
         for index in 0..dataset.frame_count() {
             let image = read_frame(&dataset, index)?;
             // The dataset's masks are read only when asked for: a recording may have few.
-            let truth = match truth_masks {
-                true => Some(read_mask(&dataset, index)?),
-                false => None,
+            let truth = if truth_masks {
+                Some(read_mask(&dataset, index)?)
+            } else {
+                None
             };
             let result = pipeline.process(&image, &dataset.camera, truth.as_ref());
             if !result.person {
