@@ -458,7 +458,10 @@ pub fn summary(o: &ImportOptions, r: &ImportReport) -> String {
             if a.best < 0.5 {
                 line += "\nwarning: the mocap does not land on the segmented person at any offset within ±1 s: check camera.toml and --offset, and that the suit's segmenter finds the person (suitcap segment)";
             } else if a.best > a.given + 0.05 {
-                line += "\nwarning: the mocap fits the video clearly better at another offset: check --offset (and camera.toml)";
+                line += &format!(
+                    "\nwarning: the mocap fits the video clearly better at another offset: check --offset (e.g. import again with --offset {:.3} --overwrite) and camera.toml",
+                    a.best_offset_s + 0.0
+                );
             }
             line
         }
