@@ -7,6 +7,7 @@
 //! `segment` and `describe` run single stages over a sequence, `check` validates a suit and a dataset,
 //! and `suit pattern` prints the suit's sewing panels.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -16,7 +17,9 @@ use clap::{Parser, Subcommand};
 
 use suitcap::mask::Mask;
 use suitcap::segment::{Segmenter, SegmenterOptions, SegmenterTables, StageTimes};
-use suitcap::source::directory::png_names_of_frames;
+use suitcap::source::directory::{
+    png_names_of_frames, timestamps_line, TIMESTAMPS_FILE, TIMESTAMPS_HEADER,
+};
 use suitcap::source::{open_source, SourceError, SourceOptions};
 use suitcap::suit::SuitDefinition;
 
@@ -242,8 +245,6 @@ fn capture(
         fps,
         ..SourceOptions::default()
     };
-    use std::io::Write;
-    use suitcap::source::directory::{timestamps_line, TIMESTAMPS_FILE, TIMESTAMPS_HEADER};
     let mut source = open_source(input, &options)?;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     // Each frame's time from the source's clock, a line per frame as it is written (unbuffered:

@@ -214,6 +214,27 @@ fn mask_names(spec: &SourceSpec) -> anyhow::Result<Option<Vec<String>>> {
     })
 }
 
+/// Copies a hand-made mask into the dataset as 8-bit grey PNG, checking its size.
+fn copy_mask(from: &Path, to: &Path, size: (u32, u32)) -> anyhow::Result<()> {
+    let mask = image::open(from)
+        .with_context(|| format!("cannot read mask {}", from.display()))?
+        .to_luma8();
+    if mask.dimensions() != size {
+        bail!(
+            "{}: {}x{} mask for {}x{} frames",
+            from.display(),
+            mask.width(),
+            mask.height(),
+            size.0,
+            size.1
+        );
+    }
+    mask.save(to)
+        .with_context(|| format!("cannot write {}", to.display()))
+}
+
+/// Imports a recording as a dataset (see the module documentation); nothing is a dataset in
+/// `o.out` until its manifest, written last, is there.
 pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
     let suit = SuitDefinition::load_dir(o.suit)?;
     let motion = Motion::load(o.bvh)?;
@@ -313,20 +334,7 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
             };
             let from = dir.join(&name);
             if from.is_file() {
-                let mask = image::open(&from)
-                    .with_context(|| format!("cannot read mask {}", from.display()))?
-                    .to_luma8();
-                if mask.dimensions() != (width, height) {
-                    bail!(
-                        "{}: {}x{} mask for {width}x{height} frames",
-                        from.display(),
-                        mask.width(),
-                        mask.height()
-                    );
-                }
-                let to = dataset::mask_path(o.out, k);
-                mask.save(&to)
-                    .with_context(|| format!("cannot write {}", to.display()))?;
+                copy_mask(&from, &dataset::mask_path(o.out, k), (width, height))?;
                 masks += 1;
             }
         }
@@ -719,6 +727,19 @@ mod tests {
         let err = format!("{:#}", import(&o).unwrap_err());
         assert!(
             err.contains("camera.toml") && err.contains("640x480") && err.contains("320x240"),
+            "{err}"
+        );
+        // A hand-made mask of another size.
+        let masks = tmp.path().join("labelled");
+        std::fs::create_dir_all(&masks).expect("dir");
+        image::GrayImage::new(10, 10)
+            .save(masks.join("000000.png"))
+            .expect("mask");
+        let mut o = r.options(&out);
+        o.masks = Some(&masks);
+        let err = format!("{:#}", import(&o).unwrap_err());
+        assert!(
+            err.contains("000000.png") && err.contains("10x10 mask"),
             "{err}"
         );
         // A camera is not a recording.
