@@ -412,6 +412,15 @@ fn check(suit: &Path, data: Option<&Path>) -> anyhow::Result<()> {
             dataset.manifest.performer(),
             dataset.manifest.clip.name
         );
+        if let Some(r) = &dataset.manifest.recording {
+            let masked = (0..dataset.frame_count())
+                .filter(|&k| dataset.mask_path(k).is_file())
+                .count();
+            println!(
+                "  recorded: video {} from its frame {}, mocap offset {} s; {masked} frames with masks",
+                r.video, r.first_video_frame, r.mocap_offset_s
+            );
+        }
     }
     Ok(())
 }
