@@ -178,6 +178,8 @@ pub enum DatasetError {
     Mismatch { path: PathBuf, message: String },
     #[error("{path} already holds a dataset; pass --overwrite to replace it")]
     Exists { path: PathBuf },
+    #[error("{path} already holds files but no dataset (an interrupted run, or another program's); pass --overwrite to replace them")]
+    Leftovers { path: PathBuf },
     #[error("{path}: cannot write: {source}")]
     Write {
         path: PathBuf,
@@ -185,19 +187,28 @@ pub enum DatasetError {
     },
 }
 
-/// Makes `out` ready for a new dataset: refuses one already there unless `overwrite` (its frames
-/// and masks then go), creates `frames/` and `masks/`, and removes an old manifest first, so that
-/// a writer interrupted from here on leaves an incomplete dataset.
+/// Makes `out` ready for a new dataset: refuses a dataset already there, or files in its
+/// `frames/` or `masks/` without one (an interrupted writer's, whose masks would pair with the new
+/// frames), unless `overwrite` (they then go); creates `frames/` and `masks/`, and removes an old
+/// manifest first, so that a writer interrupted from here on leaves an incomplete dataset.
 pub fn prepare_dataset_dir(out: &Path, overwrite: bool) -> Result<(), DatasetError> {
     let write_error = |path: &Path| {
         let path = path.to_owned();
         move |source| DatasetError::Write { path, source }
     };
     let manifest = out.join("manifest.toml");
-    if manifest.exists() && !overwrite {
-        return Err(DatasetError::Exists {
-            path: out.to_owned(),
-        });
+    if !overwrite {
+        if manifest.exists() {
+            return Err(DatasetError::Exists {
+                path: out.to_owned(),
+            });
+        }
+        for sub in ["frames", "masks"] {
+            let dir = out.join(sub);
+            if std::fs::read_dir(&dir).is_ok_and(|mut entries| entries.next().is_some()) {
+                return Err(DatasetError::Leftovers { path: dir });
+            }
+        }
     }
     for sub in ["frames", "masks"] {
         let dir = out.join(sub);
@@ -526,6 +537,30 @@ mod tests {
         let err = Dataset::open(dir.path()).unwrap_err();
         assert!(matches!(err, DatasetError::Incomplete { .. }), "{err}");
         assert!(err.to_string().contains("manifest.toml"));
+    }
+
+    #[test]
+    fn an_output_directory_is_replaced_only_when_asked() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("take");
+        prepare_dataset_dir(&out, false).expect("a new directory");
+        assert!(out.join("frames").is_dir() && out.join("masks").is_dir());
+        // An interrupted writer's mask: refused, then cleared with overwrite.
+        std::fs::write(out.join("masks").join("000000.png"), b"old").expect("write");
+        let err = prepare_dataset_dir(&out, false).unwrap_err();
+        assert!(matches!(err, DatasetError::Leftovers { .. }), "{err}");
+        assert!(err.to_string().contains("masks") && err.to_string().contains("--overwrite"));
+        prepare_dataset_dir(&out, true).expect("overwrite");
+        assert_eq!(
+            std::fs::read_dir(out.join("masks")).expect("dir").count(),
+            0
+        );
+        // A finished dataset: refused; with overwrite its manifest goes first.
+        std::fs::write(out.join("manifest.toml"), "format = 1").expect("write");
+        let err = prepare_dataset_dir(&out, false).unwrap_err();
+        assert!(matches!(err, DatasetError::Exists { .. }), "{err}");
+        prepare_dataset_dir(&out, true).expect("overwrite");
+        assert!(!out.join("manifest.toml").exists());
     }
 
     #[test]

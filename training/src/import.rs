@@ -288,6 +288,25 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
         );
     }
 
+    // The output's frames/ and masks/ are replaced: the inputs must not be in them.
+    if let Ok(out) = std::fs::canonicalize(o.out) {
+        let inputs = [("--video", Some(Path::new(o.video))), ("--masks", o.masks)];
+        for (flag, input) in inputs {
+            let Some(input) = input.and_then(|p| std::fs::canonicalize(p).ok()) else {
+                continue;
+            };
+            if ["frames", "masks"]
+                .iter()
+                .any(|sub| input.starts_with(out.join(sub)))
+            {
+                bail!(
+                    "{flag} {}: inside {}'s frames/ or masks/, which the import replaces; give another --out",
+                    input.display(),
+                    o.out.display()
+                );
+            }
+        }
+    }
     dataset::prepare_dataset_dir(o.out, o.overwrite)?;
     let manifest_path = o.out.join("manifest.toml");
 
@@ -742,6 +761,15 @@ mod tests {
             err.contains("000000.png") && err.contains("10x10 mask"),
             "{err}"
         );
+        // An output that holds the video.
+        let mut o = r.options(&r.rec.root);
+        o.overwrite = true;
+        let err = format!("{:#}", import(&o).unwrap_err());
+        assert!(
+            err.contains("--video") && err.contains("another --out"),
+            "{err}"
+        );
+        assert!(r.rec.frame_path(0).is_file(), "the video is untouched");
         // A camera is not a recording.
         let mut o = r.options(&out);
         o.video = "/dev/video0";
