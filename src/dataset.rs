@@ -468,6 +468,11 @@ impl Dataset {
         mask_path(&self.root, index)
     }
 
+    /// Whether frame `index` has a mask (a recording may have masks for some frames only).
+    pub fn has_mask(&self, index: usize) -> bool {
+        self.mask_path(index).is_file()
+    }
+
     /// Reads `markers.csv`.
     pub fn markers(&self) -> Result<Vec<MarkerRecord>, DatasetError> {
         let path = self.root.join("markers.csv");

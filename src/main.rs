@@ -414,7 +414,7 @@ fn check(suit: &Path, data: Option<&Path>) -> anyhow::Result<()> {
         );
         if let Some(r) = &dataset.manifest.recording {
             let masked = (0..dataset.frame_count())
-                .filter(|&k| dataset.mask_path(k).is_file())
+                .filter(|&k| dataset.has_mask(k))
                 .count();
             println!(
                 "  recorded: video {} from its frame {}, mocap offset {} s; {masked} frames with masks",

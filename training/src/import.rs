@@ -154,21 +154,8 @@ fn check_alignment(
     }
     let tables = suitcap::segment::SegmenterTables::load(o.suit)?;
     let joints = suit.skeleton.bind(&motion.skeleton)?;
-    let mut segmenter = suitcap::segment::Segmenter::new(
-        tables,
-        suit,
-        suitcap::segment::SegmenterOptions::default(),
-    );
     let frames = video_times.len().min(CHECK_FRAMES);
-    let masks = (0..frames)
-        .map(|k| {
-            let path = dataset::frame_path(o.out, k);
-            let frame = image::open(&path)
-                .with_context(|| format!("cannot read {}", path.display()))?
-                .to_rgb8();
-            Ok(segmenter.segment(&frame).mask)
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
+    let masks = super::segmenter_masks(&dataset::Dataset::open(o.out)?, suit, tables, frames)?;
     let joints_px = |s: usize| {
         let positions = motion.skeleton.joint_positions(motion.frame(s));
         joints
@@ -445,6 +432,12 @@ fn file_name(path: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// `seconds` rounded to the millisecond, without a negative zero: the scanned offsets are sums of
+/// steps, so the one that is 0 may come out as −1e-17, printed "-0.000".
+fn to_millisecond(seconds: f64) -> f64 {
+    (seconds * 1000.0).round() / 1000.0 + 0.0
+}
+
 /// The command's output line.
 pub fn summary(o: &ImportOptions, r: &ImportReport) -> String {
     let out: PathBuf = o.out.to_owned();
@@ -479,7 +472,7 @@ pub fn summary(o: &ImportOptions, r: &ImportReport) -> String {
                 a.frames,
                 100.0 * a.given,
                 o.offset_s,
-                a.best_offset_s + 0.0, // + 0.0 turns a -0.0 into 0.0
+                to_millisecond(a.best_offset_s),
                 100.0 * a.best
             );
             if a.best < 0.5 {
@@ -487,7 +480,7 @@ pub fn summary(o: &ImportOptions, r: &ImportReport) -> String {
             } else if a.best > a.given + 0.05 {
                 line += &format!(
                     "\nwarning: the mocap fits the video clearly better at another offset: check --offset (e.g. import again with --offset {:.3} --overwrite) and camera.toml",
-                    a.best_offset_s + 0.0
+                    to_millisecond(a.best_offset_s)
                 );
             }
             line
@@ -561,6 +554,13 @@ mod tests {
                 command: "test".into(),
             }
         }
+    }
+
+    #[test]
+    fn offsets_print_without_a_negative_zero() {
+        let scanned = -0.1 + 3.0 * (1.0 / 30.0);
+        assert_eq!(format!("{:.3}", to_millisecond(scanned)), "0.000");
+        assert_eq!(to_millisecond(-0.2504), -0.25);
     }
 
     #[test]

@@ -272,15 +272,29 @@ fn read_mask(dataset: &Dataset, index: usize) -> anyhow::Result<Mask> {
     Ok(Mask::from_gray(&mask))
 }
 
+/// The suit segmenter's masks of a dataset's first `frames` frames, segmented in order as one
+/// stream (its motion and temporal terms need the frames before).
+fn segmenter_masks(
+    dataset: &Dataset,
+    suit: &SuitDefinition,
+    tables: suitcap::segment::SegmenterTables,
+    frames: usize,
+) -> anyhow::Result<Vec<Mask>> {
+    let mut segmenter = suitcap::segment::Segmenter::new(
+        tables,
+        suit,
+        suitcap::segment::SegmenterOptions::default(),
+    );
+    (0..frames.min(dataset.frame_count()))
+        .map(|index| Ok(segmenter.segment(&read_frame(dataset, index)?).mask))
+        .collect()
+}
+
 /// The first frame of the first run of `length` consecutive frames that all have a mask.
 fn first_labelled_run(dataset: &Dataset, length: usize) -> Option<usize> {
     let mut run = 0;
     for index in 0..dataset.frame_count() {
-        run = if dataset.mask_path(index).is_file() {
-            run + 1
-        } else {
-            0
-        };
+        run = if dataset.has_mask(index) { run + 1 } else { 0 };
         if run == length {
             return Some(index + 1 - length);
         }
@@ -297,7 +311,7 @@ fn masks_for_unlabelled_frames(
     dataset: &Dataset,
 ) -> anyhow::Result<Vec<Option<Mask>>> {
     let n = dataset.frame_count();
-    let unlabelled: Vec<bool> = (0..n).map(|i| !dataset.mask_path(i).is_file()).collect();
+    let unlabelled: Vec<bool> = (0..n).map(|i| !dataset.has_mask(i)).collect();
     let missing = unlabelled.iter().filter(|&&u| u).count();
     if missing == 0 {
         return Ok(Vec::new());
@@ -311,17 +325,12 @@ fn masks_for_unlabelled_frames(
                 .display()
         )
     })?;
-    let mut segmenter = suitcap::segment::Segmenter::new(
-        tables,
-        suit,
-        suitcap::segment::SegmenterOptions::default(),
-    );
-    (0..n)
-        .map(|index| {
-            let mask = segmenter.segment(&read_frame(dataset, index)?).mask;
-            Ok(unlabelled[index].then_some(mask))
-        })
-        .collect()
+    let masks = segmenter_masks(dataset, suit, tables, n)?;
+    Ok(masks
+        .into_iter()
+        .zip(unlabelled)
+        .map(|(mask, unlabelled)| unlabelled.then_some(mask))
+        .collect())
 }
 
 fn codebooks(
@@ -436,17 +445,12 @@ fn training_set(
     let layout = PoseLayout::new(&suit.skeleton, &dataset.motion.skeleton)
         .with_context(|| format!("{}: motion.bvh", dataset.root.display()))?;
     let segmented: Option<Vec<Mask>> = match segmenter {
-        Some(tables) => {
-            let mut segmenter = suitcap::segment::Segmenter::new(
-                tables.clone(),
-                suit,
-                suitcap::segment::SegmenterOptions::default(),
-            );
-            let masks = (0..dataset.frame_count())
-                .map(|index| Ok(segmenter.segment(&read_frame(dataset, index)?).mask))
-                .collect::<anyhow::Result<Vec<_>>>()?;
-            Some(masks)
-        }
+        Some(tables) => Some(segmenter_masks(
+            dataset,
+            suit,
+            tables.clone(),
+            dataset.frame_count(),
+        )?),
         None => None,
     };
     let rows = (0..dataset.frame_count())
