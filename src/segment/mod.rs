@@ -20,4 +20,6 @@ pub mod train;
 
 pub use segmenter::{Segmentation, Segmenter, SegmenterOptions, StageTimes};
 pub use tables::{SegmenterTables, Weights};
-pub use train::{train_segmenter, TrainReport, TrainingFrame};
+pub use train::{
+    train_segmenter, TrainReport, TrainingFrame, MAX_VALIDATION_FRAMES, MIN_VALIDATION_FRAMES,
+};

@@ -15,7 +15,9 @@ use clap::{Parser, Subcommand};
 
 use suitcap::dataset::Dataset;
 use suitcap::mask::Mask;
-use suitcap::segment::{train_segmenter, TrainingFrame};
+use suitcap::segment::{
+    train_segmenter, TrainingFrame, MAX_VALIDATION_FRAMES, MIN_VALIDATION_FRAMES,
+};
 use suitcap::stats::median;
 use suitcap::suit::SuitDefinition;
 
@@ -50,6 +52,11 @@ enum Command {
         /// Of those, the last N are held back to choose the term weights.
         #[arg(long, default_value_t = 6)]
         held_back: usize,
+        /// Another dataset (another room, person, light) whose first run of consecutive masked
+        /// frames (24 to 60 of them) is scored in the weights' search too (repeatable): the
+        /// held-back frames share the training frames' room.
+        #[arg(long = "validate")]
+        validate: Vec<PathBuf>,
         /// The cut runs on frames box-downscaled by this factor (taller frames at run time may be
         /// cut at a larger one that keeps at least 1.5 times the rows of the grid trained on; see
         /// `SegmenterTables::cut_factor`).
@@ -208,6 +215,7 @@ fn segment(
     start: usize,
     held_back: usize,
     downscale: u32,
+    validate: &[PathBuf],
 ) -> anyhow::Result<()> {
     let suit = SuitDefinition::load_dir(suit_dir)?;
     let dataset = Dataset::open(data)?;
@@ -224,18 +232,39 @@ fn segment(
         let (image, mask) = frame_and_mask(&dataset, index)?;
         training.push(TrainingFrame { image, mask });
     }
+    let validation = validation_frames(validate)?;
     let started = std::time::Instant::now();
-    let (tables, report) = train_segmenter(&training, &suit, downscale, held_back)?;
+    let (tables, report) = train_segmenter(&training, &suit, downscale, held_back, &validation)?;
     tables.save(suit_dir)?;
     let w = report.weights;
+    let others = match (report.default_validation_iou, report.chosen_validation_iou) {
+        (Some(default), Some(chosen)) => format!(
+            "; on {} other sequences {chosen:.4} (all weights 1: {default:.4})",
+            report.validation_sequences
+        ),
+        _ => String::new(),
+    };
     println!(
-        "segmenter trained on frames {start}..{} of {} in {:.1} s: tables counted on the first {} frames, weights chosen on the last {} (coordinate search, {} runs): \
-         σ_C {:.3}, σ_N {:.3}, σ_G {:.3}, σ_M {:.3}, σ_T {:.3}; held-back mean IoU {:.4} (all weights 1: {:.4}); final tables counted on all {} frames; written to {}",
+        "segmenter trained on frames {start}..{} of {} in {:.1} s: tables counted on the first {} frames, weights chosen on the last {}{} (coordinate search, {} runs): \
+         σ_C {:.3}, σ_N {:.3}, σ_G {:.3}, σ_M {:.3}, σ_T {:.3}; held-back mean IoU {:.4} (all weights 1: {:.4}){others}; final tables counted on all {} frames; written to {}",
         start + frames,
         data.display(),
         started.elapsed().as_secs_f64(),
         report.frames - report.held_back,
         report.held_back,
+        if validation.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " and on {}",
+                validate
+                    .iter()
+                    .zip(&validation)
+                    .map(|(d, frames)| format!("{} frames of {}", frames.len(), d.display()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        },
         report.evaluations,
         w.colour,
         w.neighbourhood,
@@ -248,6 +277,37 @@ fn segment(
         suit_dir.join(suitcap::segment::tables::SEGMENTER_FILE).display()
     );
     Ok(())
+}
+
+/// The first run of at least [`MIN_VALIDATION_FRAMES`] consecutive frames with masks, cut at
+/// [`MAX_VALIDATION_FRAMES`].
+fn validation_run(dataset: &Dataset) -> Option<std::ops::Range<usize>> {
+    let start = first_labelled_run(dataset, MIN_VALIDATION_FRAMES)?;
+    let end = (start..dataset.frame_count().min(start + MAX_VALIDATION_FRAMES))
+        .find(|&index| !dataset.has_mask(index))
+        .unwrap_or(dataset.frame_count().min(start + MAX_VALIDATION_FRAMES));
+    Some(start..end)
+}
+
+/// The frames of other sequences the segmenter's weights are also scored on: each dataset's
+/// [`validation_run`].
+fn validation_frames(dirs: &[PathBuf]) -> anyhow::Result<Vec<Vec<TrainingFrame>>> {
+    dirs.iter()
+        .map(|dir| {
+            let dataset = Dataset::open(dir)?;
+            let run = validation_run(&dataset).with_context(|| {
+                format!(
+                    "{}: no {MIN_VALIDATION_FRAMES} consecutive frames with masks to score the segmenter's weights on",
+                    dir.display()
+                )
+            })?;
+            run.map(|index| {
+                    let (image, mask) = frame_and_mask(&dataset, index)?;
+                    Ok(TrainingFrame { image, mask })
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// Reads frame `index` and its mask from a dataset, naming the file on error.
@@ -757,7 +817,7 @@ fn train_suit(
             start + SEGMENTER_FRAMES,
             dir.display()
         );
-        segment(suit_dir, dir, SEGMENTER_FRAMES, start, 6, 2)?;
+        segment(suit_dir, dir, SEGMENTER_FRAMES, start, 6, 2, &[])?;
     } else {
         println!("stage 1/3: segmenter present");
     }
@@ -1293,7 +1353,10 @@ fn main() -> ExitCode {
             start,
             held_back,
             downscale,
-        } => segment(suit, data, *frames, *start, *held_back, *downscale),
+            validate,
+        } => segment(
+            suit, data, *frames, *start, *held_back, *downscale, validate,
+        ),
         Command::Codebooks {
             suit,
             data,
