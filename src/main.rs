@@ -326,8 +326,18 @@ fn check_trained_models(suit: &Path, definition: &SuitDefinition) -> anyhow::Res
     use suitcap::segment::tables::SEGMENTER_FILE;
     let (mut loaded, mut missing) = (Vec::new(), Vec::new());
     if suit.join(SEGMENTER_FILE).exists() {
-        SegmenterTables::load(suit)?;
-        loaded.push("segmenter tables".to_string());
+        let tables = SegmenterTables::load(suit)?;
+        let w = tables.weights;
+        loaded.push(format!(
+            "segmenter tables (trained on frames {} rows high, cut at 1/{}; σ_C {}, σ_N {}, σ_G {}, σ_M {}, σ_T {})",
+            tables.trained_rows * tables.downscale,
+            tables.downscale,
+            w.colour,
+            w.neighbourhood,
+            w.gradient,
+            w.motion,
+            w.temporal
+        ));
     } else {
         missing.push(SEGMENTER_FILE);
     }
