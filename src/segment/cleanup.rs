@@ -303,8 +303,18 @@ pub fn distance_near(
 }
 
 /// How far the person's parts outside the suit (head, hands, shoes) reach from it, as a share of the
-/// suit region's height: the head of an upright person is about an eighth of their height.
+/// suit region's height: the head of an upright person is about an eighth of their height. The
+/// band in which training counts the part colours, and how near the main region another piece of
+/// suit is kept.
 pub const PART_REACH: f32 = 0.15;
+
+/// How far the segmenter looks for the head, hands and shoes around the suit at run time, as a
+/// share of the suit region's height. A head with its neck is 0.16–0.2 of it, and the band of
+/// [`PART_REACH`] cut the top off upright heads (walk 02_01 over the moving video). On the six
+/// pose test sequences with the shipped tables 0.15 → 0.2 gave 0.9229, 0.8212, 0.9440, 0.9526,
+/// 0.9421, 0.8474 → 0.9292, 0.8220, 0.9514, 0.9510, 0.9501, 0.8633 IoU, and the default suit's
+/// weight search the same weights (docs/measurements.md, second session of 2026-12-05).
+pub const ATTACH_REACH: f32 = 0.2;
 
 /// Rows spanned by the set pixels of `region` (row-major, `width` wide); 0 when none is set.
 pub fn region_height(region: &[bool], width: usize) -> usize {

@@ -36,7 +36,7 @@ use image::RgbImage;
 
 use super::cleanup::{
     attach_parts, clean, distance_near, part_band, region_height, CleanupReport, PartLimits,
-    PixelBox, RegionRule, PART_REACH,
+    PixelBox, RegionRule, ATTACH_REACH, PART_REACH,
 };
 use super::features::{
     colour_index, contrast_bin, downscale, is_near_pattern, is_suit_pattern, temporal_bin,
@@ -107,7 +107,7 @@ impl Default for SegmenterOptions {
             adapt_rate: 0.3,
             adapt_margin: 4,
             adapt_share: 0.7,
-            part_reach: PART_REACH,
+            part_reach: ATTACH_REACH,
             piece_reach: PART_REACH,
             part_max_share: 0.05,
             part_max_top_share: 0.1,

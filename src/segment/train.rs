@@ -19,7 +19,7 @@
 //! a new room's ambiguous colours gave unaries of 4–7 nats a pixel against edge weights of 20–25,
 //! and the cut dropped a 16-pixel-wide shin over a tan box rather than pay for its outline.
 //! Scored on three other sequences too, the search picks weights under which the script's five
-//! test sequences gain 0.012–0.097 IoU (docs/measurements.md, second session of 2026-12-05).
+//! test sequences gain 0.013–0.096 IoU (docs/measurements.md, second session of 2026-12-05).
 //! Which optimum wins still depends on the sequences scored, and `suitcap-train suit` passes none:
 //! on the default suit's data its held-back frames alone already pick σ_C 4, σ_N 4, and three of
 //! its other clips as validation picked weights 0.004 IoU worse on the pose test sequences.
