@@ -283,9 +283,10 @@ fn segment(
 /// [`MAX_VALIDATION_FRAMES`].
 fn validation_run(dataset: &Dataset) -> Option<std::ops::Range<usize>> {
     let start = first_labelled_run(dataset, MIN_VALIDATION_FRAMES)?;
-    let end = (start..dataset.frame_count().min(start + MAX_VALIDATION_FRAMES))
+    let limit = dataset.frame_count().min(start + MAX_VALIDATION_FRAMES);
+    let end = (start..limit)
         .find(|&index| !dataset.has_mask(index))
-        .unwrap_or(dataset.frame_count().min(start + MAX_VALIDATION_FRAMES));
+        .unwrap_or(limit);
     Some(start..end)
 }
 
@@ -1432,31 +1433,57 @@ fn main() -> ExitCode {
 
 #[cfg(test)]
 mod tests {
-    use super::{clip_indices, held_back, training_set};
+    use super::{clip_indices, held_back, training_set, validation_run};
     use std::path::{Path, PathBuf};
     use suitcap::descriptor::{Codebooks, DescriptorKind};
+    use suitcap_tools::synth::SynthOptions;
 
     fn repo(path: &str) -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(path)
     }
 
+    /// The generator's options for `frames` frames of the bundled walk at `width` × `height`.
+    fn walk(out: &Path, frames: usize, width: u32, height: u32) -> SynthOptions {
+        SynthOptions {
+            frames: Some(frames),
+            width,
+            height,
+            ..SynthOptions::new(
+                repo("tests/data/mocap/cmu_02_01_walk.bvh"),
+                out.to_owned(),
+                repo("suits/default"),
+                vec![repo("tests/data/backgrounds")],
+            )
+        }
+    }
+
+    #[test]
+    fn the_validation_run_is_the_first_long_enough_run_of_masked_frames() {
+        use suitcap_tools::synth::generate;
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let out = tmp.path().join("walk");
+        generate(&walk(&out, 40, 160, 120), &|| {}).expect("dataset");
+        let open = || suitcap::dataset::Dataset::open(&out).expect("reopens");
+        let unmask = |index: usize| std::fs::remove_file(open().mask_path(index)).expect("remove");
+        assert_eq!(validation_run(&open()), Some(0..40));
+        // Frames 3..30 (27 of them) are the first run of at least 24 masked frames.
+        unmask(2);
+        unmask(30);
+        assert_eq!(validation_run(&open()), Some(3..30));
+        // Runs of 17, 9 and 9: none is long enough.
+        unmask(20);
+        assert_eq!(validation_run(&open()), None);
+    }
+
     #[test]
     fn describing_several_kinds_at_once_gives_each_kind_alone() {
-        use suitcap_tools::synth::{generate, SynthOptions};
+        use suitcap_tools::synth::generate;
         let tmp = tempfile::tempdir().expect("tempdir");
         let out = tmp.path().join("walk");
         let options = SynthOptions {
             start_frame: 20,
-            frames: Some(3),
-            width: 320,
-            height: 240,
             seed: 5,
-            ..SynthOptions::new(
-                repo("tests/data/mocap/cmu_02_01_walk.bvh"),
-                out.clone(),
-                repo("suits/default"),
-                vec![repo("tests/data/backgrounds")],
-            )
+            ..walk(&out, 3, 320, 240)
         };
         generate(&options, &|| {}).expect("dataset");
         let dataset = suitcap::dataset::Dataset::open(&out).expect("reopens");
