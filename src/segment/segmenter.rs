@@ -23,7 +23,8 @@
 //!    connected to it whose colour is likelier under the learned part table than under the (online)
 //!    background, in pieces shaped like a head, a hand or a shoe ([`SegmenterOptions::part_max_share`],
 //!    [`SegmenterOptions::part_max_top_share`], [`SegmenterOptions::part_max_round_share`],
-//!    [`SegmenterOptions::part_min_depth`]);
+//!    [`SegmenterOptions::part_min_depth`]); a head that the band joined to too much background
+//!    is looked for again within a narrower band ([`SegmenterOptions::part_reach_narrow`]);
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut; then moves the outline onto the frame's colour edge
 //!    ([`snap`](super::snap); its time is counted in the refinement's).
@@ -35,8 +36,8 @@ use std::time::Instant;
 use image::RgbImage;
 
 use super::cleanup::{
-    attach_parts, clean, distance_near, part_band, region_height, CleanupReport, PartLimits,
-    PixelBox, RegionRule, ATTACH_REACH, PART_REACH,
+    attach_parts_narrowing, clean, distance_near, part_bands, region_height, CleanupReport,
+    PartLimits, PixelBox, RegionRule, ATTACH_REACH, PART_REACH,
 };
 use super::features::{
     colour_index, contrast_bin, downscale, is_near_pattern, is_suit_pattern, temporal_bin,
@@ -72,6 +73,10 @@ pub struct SegmenterOptions {
     /// How far the head, hands and shoes are looked for around the suit, as a share of the suit
     /// region's height (0: the mask is the suit only).
     pub part_reach: f32,
+    /// Where a piece found within `part_reach` is too large or too shallow for a part, it is
+    /// looked for again within this narrower band, as a share of the suit region's height (see
+    /// [`attach_parts_narrowing`]; equal to `part_reach`: no second look).
+    pub part_reach_narrow: f32,
     /// How near the main region, as a share of its height, another piece of the suit is kept (see
     /// [`keep_person_region`](super::cleanup::keep_person_region); 0: the main region only).
     pub piece_reach: f32,
@@ -108,6 +113,7 @@ impl Default for SegmenterOptions {
             adapt_margin: 4,
             adapt_share: 0.7,
             part_reach: ATTACH_REACH,
+            part_reach_narrow: PART_REACH,
             piece_reach: PART_REACH,
             part_max_share: 0.05,
             part_max_top_share: 0.1,
@@ -187,7 +193,10 @@ pub struct Segmenter {
     trained_background_bin: Vec<f32>,
     distance: Vec<u16>,
     band: Vec<bool>,
+    narrow_band: Vec<bool>,
     part: Vec<bool>,
+    /// The person and parts of the narrow band's pass (see [`attach_parts_narrowing`]).
+    narrow_parts: (Vec<bool>, Vec<bool>),
     stack: Vec<usize>,
 }
 
@@ -290,7 +299,9 @@ impl Segmenter {
             trained_background_bin,
             distance: Vec::new(),
             band: Vec::new(),
+            narrow_band: Vec::new(),
             part: Vec::new(),
+            narrow_parts: (Vec::new(), Vec::new()),
             stack: Vec::new(),
         }
     }
@@ -555,13 +566,13 @@ impl Segmenter {
         );
         // The parts outside the suit: band pixels whose colour is likelier a part than background.
         let mut person = labels.clone();
-        part_band(
+        part_bands(
             &labels,
             w,
             h,
-            self.options.part_reach,
+            (self.options.part_reach, self.options.part_reach_narrow),
             &mut self.distance,
-            &mut self.band,
+            (&mut self.band, &mut self.narrow_band),
         );
         let sigma = self.tables.weights.colour;
         let (part_nll, prior, bg) = (
@@ -570,9 +581,9 @@ impl Segmenter {
             &self.background_bin,
         );
         let suit_area = labels.iter().filter(|&&l| l).count() as f32;
-        let added = attach_parts(
+        let attached = attach_parts_narrowing(
             &mut person,
-            &self.band,
+            (&self.band, &self.narrow_band),
             w,
             h,
             |i| {
@@ -587,8 +598,9 @@ impl Segmenter {
             },
             &mut self.part,
             &mut self.stack,
+            &mut self.narrow_parts,
         );
-        if added > 0 {
+        if attached.added > 0 {
             let filled = clean(&mut person, w, h, None, max_hole, &mut crop, &mut ids);
             report.holes_filled += filled.holes_filled;
             report.pixels_filled += filled.pixels_filled;
