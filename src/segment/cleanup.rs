@@ -507,18 +507,17 @@ pub struct Attached {
 }
 
 /// [`attach_parts`] within `band`, and where that took back a piece reaching the suit's top row, a
-/// second look for heads
-/// within `narrow` (a band inside `band`): the pieces of that pass that reach as high as the suit's
-/// top row and fit `max_top_area` are added too (`part` marks the added pixels of both). The wide
-/// band lets an upright head join whole, but where the head meets background of its colour it
-/// joins more of that than the narrow band does, and the piece, too large for a head, was taken
-/// back whole: on the dance over the cat photograph the head went missing in the first frames,
-/// and the body size measured on them came out 168 cm for a 193 cm subject (182 cm with the
-/// narrow band). Hands and shoes get no second look: beside the legs the narrow band's pieces
-/// are mostly background (given a second look for every piece, the jump of the pose test
-/// sequences lost 0.011 IoU; for heads only 0.003, the other five within 0.0001; see
-/// docs/measurements.md, third session of 2026-12-05). `scratch` holds the second pass's person
-/// and parts.
+/// second look for heads within `narrow` (a band inside `band`): the pieces of that pass that
+/// reach as high as the suit's top row and fit `max_top_area` are added too (`part` marks the
+/// added pixels of both). The wide band lets an upright head join whole, but where the head meets
+/// background of its colour it joins more of that than the narrow band does, and the piece, too
+/// large for a head, was taken back whole: on the dance over the cat photograph the head went
+/// missing in the first frames, and the body size measured on them came out 168 cm for a 193 cm
+/// subject (182 cm with the narrow band). Hands and shoes get no second look: beside the legs the
+/// narrow band's pieces are mostly background (given a second look for every piece, the jump of
+/// the pose test sequences lost 0.011 IoU; for heads only 0.003, the other five within 0.0001;
+/// see docs/measurements.md, third session of 2026-12-05). `scratch` holds the second pass's
+/// person and parts.
 #[allow(clippy::too_many_arguments)]
 pub fn attach_parts_narrowing(
     person: &mut [bool],
@@ -531,13 +530,14 @@ pub fn attach_parts_narrowing(
     stack: &mut Vec<usize>,
     scratch: &mut (Vec<bool>, Vec<bool>),
 ) -> Attached {
-    let (narrow_person, narrow_part) = scratch;
-    narrow_person.clear();
-    narrow_person.extend_from_slice(person);
     let wide = attach_parts(person, band, width, height, &part_like, limits, part, stack);
     if wide.taken_back_at_top == 0 {
         return wide;
     }
+    // The second pass starts from the suit again: the person without the parts just added.
+    let (narrow_person, narrow_part) = scratch;
+    narrow_person.clear();
+    narrow_person.extend(person.iter().zip(part.iter()).map(|(&p, &q)| p && !q));
     let heads = PartLimits {
         max_area: 0,
         max_round_area: 0,
