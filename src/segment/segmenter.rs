@@ -73,9 +73,10 @@ pub struct SegmenterOptions {
     /// How far the head, hands and shoes are looked for around the suit, as a share of the suit
     /// region's height (0: the mask is the suit only).
     pub part_reach: f32,
-    /// Where a piece found within `part_reach` is too large or too shallow for a part, it is
-    /// looked for again within this narrower band, as a share of the suit region's height (see
-    /// [`attach_parts_narrowing`]; equal to `part_reach`: no second look).
+    /// Where a piece found within `part_reach` that reaches the suit's top row is too large or
+    /// too shallow for a part, a head is looked for again within this narrower band, as a share of
+    /// the suit region's height (see [`attach_parts_narrowing`]; 0 or `part_reach`: the second
+    /// look finds nothing new).
     pub part_reach_narrow: f32,
     /// How near the main region, as a share of its height, another piece of the suit is kept (see
     /// [`keep_person_region`](super::cleanup::keep_person_region); 0: the main region only).
