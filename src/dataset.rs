@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! DATASET/
-//!   frames/000000.png …   RGB frames, numbered from 0
+//!   frames/000000.png …   RGB frames, numbered from 0 (or all .jpg: the bundled demo's are)
 //!   masks/000000.png …    ground-truth person masks (8-bit grey, 255 = person, 0 = not)
 //!   motion.bvh            ground-truth pose, one BVH frame per image frame, at the video's rate
 //!   camera.toml           intrinsics and extrinsics in the mocap's world frame (see `camera`)
@@ -223,7 +223,10 @@ pub fn prepare_dataset_dir(out: &Path, overwrite: bool) -> Result<(), DatasetErr
     Ok(())
 }
 
-/// Path of frame `index` under `frames/`.
+/// The frame file extensions a dataset may use, the written one first.
+const FRAME_EXTENSIONS: [&str; 2] = ["png", "jpg"];
+
+/// Path of frame `index` under `frames/` (as written: PNG; [`Dataset::frame_path`] also finds JPEG).
 pub fn frame_path(root: &Path, index: usize) -> PathBuf {
     root.join("frames").join(format!("{index:06}.png"))
 }
@@ -410,6 +413,9 @@ pub struct Dataset {
     pub manifest: Manifest,
     pub camera: Camera,
     pub motion: Motion,
+    /// The frames' file extension: `png` (what the generator and the importer write) or `jpg`
+    /// (a dataset shipped compressed, like the bundled demo), as frame 0 has it.
+    pub frame_extension: &'static str,
 }
 
 impl Dataset {
@@ -442,8 +448,12 @@ impl Dataset {
                 ),
             ));
         }
+        let frame_extension = FRAME_EXTENSIONS
+            .into_iter()
+            .find(|ext| frame_path(root, 0).with_extension(ext).is_file())
+            .unwrap_or(FRAME_EXTENSIONS[0]);
         for index in [0, manifest.frames.saturating_sub(1)] {
-            let frame = frame_path(root, index);
+            let frame = frame_path(root, index).with_extension(frame_extension);
             if manifest.frames > 0 && !frame.is_file() {
                 return Err(mismatch(frame, "missing frame".into()));
             }
@@ -453,6 +463,7 @@ impl Dataset {
             manifest,
             camera,
             motion,
+            frame_extension,
         })
     }
 
@@ -461,7 +472,7 @@ impl Dataset {
     }
 
     pub fn frame_path(&self, index: usize) -> PathBuf {
-        frame_path(&self.root, index)
+        frame_path(&self.root, index).with_extension(self.frame_extension)
     }
 
     pub fn mask_path(&self, index: usize) -> PathBuf {
@@ -534,6 +545,18 @@ mod tests {
         assert!(err.contains("header"), "{err}");
         let text = format!("{MARKERS_HEADER}\n0,1,red,1,2,1.5,9\n");
         assert!(markers_from_csv(&text, Path::new("m.csv")).is_err());
+    }
+
+    #[test]
+    fn the_bundled_demo_is_a_dataset_of_jpeg_frames() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default/demo/640x480");
+        let dataset = Dataset::open(&root).expect("the demo opens");
+        assert_eq!(dataset.frame_extension, "jpg");
+        let last = dataset.frame_path(dataset.frame_count() - 1);
+        assert!(last.ends_with("frames/000059.jpg"), "{}", last.display());
+        assert!(last.is_file());
+        // Writers still name PNG files.
+        assert!(frame_path(&root, 0).ends_with("frames/000000.png"));
     }
 
     #[test]

@@ -21,5 +21,6 @@ pub mod train;
 pub use segmenter::{Segmentation, Segmenter, SegmenterOptions, StageTimes};
 pub use tables::{SegmenterTables, Weights};
 pub use train::{
-    train_segmenter, TrainReport, TrainingFrame, MAX_VALIDATION_FRAMES, MIN_VALIDATION_FRAMES,
+    search_weights, train_segmenter, SearchOutcome, TrainReport, TrainingFrame, WeightSearch,
+    MAX_VALIDATION_FRAMES, MIN_VALIDATION_FRAMES,
 };

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use suitcap::dataset::Dataset;
 use suitcap::mask::Mask;
-use suitcap::segment::{train_segmenter, Segmenter, SegmenterOptions, TrainingFrame};
+use suitcap::segment::{train_segmenter, Segmenter, SegmenterOptions, TrainingFrame, WeightSearch};
 use suitcap::suit::SuitDefinition;
 use suitcap_tools::synth::{generate, SynthOptions};
 
@@ -62,7 +62,9 @@ fn trained_on_one_sequence_it_segments_another() {
         train.manifest.scene.as_ref().map(|s| &s.backgrounds),
         test.manifest.scene.as_ref().map(|s| &s.backgrounds)
     );
-    let (tables, report) = train_segmenter(&frames(&train), &suit, 2, 4, &[]).expect("trains");
+    let (tables, report) =
+        train_segmenter(&frames(&train), &suit, 2, 4, &[], WeightSearch::default())
+            .expect("trains");
     assert!(report.chosen_iou >= report.default_iou);
 
     let mut segmenter = Segmenter::new(tables.clone(), &suit, SegmenterOptions::default());

@@ -16,7 +16,7 @@ use clap::{Parser, Subcommand};
 use suitcap::dataset::Dataset;
 use suitcap::mask::Mask;
 use suitcap::segment::{
-    train_segmenter, TrainingFrame, MAX_VALIDATION_FRAMES, MIN_VALIDATION_FRAMES,
+    train_segmenter, TrainingFrame, WeightSearch, MAX_VALIDATION_FRAMES, MIN_VALIDATION_FRAMES,
 };
 use suitcap::stats::median;
 use suitcap::suit::SuitDefinition;
@@ -62,6 +62,10 @@ enum Command {
         /// `SegmenterTables::cut_factor`).
         #[arg(long, default_value_t = 2)]
         downscale: u32,
+        /// How the term weights are searched for: `pairs` (default) also moves two weights at
+        /// once; `coordinate` one at a time only (as the shipped suit's were chosen).
+        #[arg(long, value_enum, default_value_t = SearchArg::Pairs)]
+        search: SearchArg,
     },
     /// Learn the FC (200), HOG (100) and silhouette (100) codebooks by k-means over the local
     /// histograms of every frame of the datasets (their masks; a frame without one, as in a recording
@@ -101,6 +105,9 @@ enum Command {
         /// time, head, hands and leaks included) or `truth` (the datasets' masks).
         #[arg(long, value_enum, default_value_t = TrainingMasks::Segmenter)]
         masks: TrainingMasks,
+        /// How the segmenter's term weights are searched for, when it is trained (as for `segment`).
+        #[arg(long, value_enum, default_value_t = SearchArg::Pairs)]
+        search: SearchArg,
     },
     /// Learn the joint limits (per rotation channel, the range the training motions cover plus a
     /// margin) from mocap-aligned datasets or BVH clips; writes SUIT/joint_limits.toml.
@@ -208,15 +215,30 @@ enum Command {
     },
 }
 
+/// Which frames `suitcap-train segment` learns from and how.
+struct SegmentRun {
+    /// Consecutive frames used, from `start`.
+    frames: usize,
+    start: usize,
+    /// Of those, the last ones kept for the weights' search.
+    held_back: usize,
+    downscale: u32,
+    search: WeightSearch,
+}
+
 fn segment(
     suit_dir: &Path,
     data: &Path,
-    frames: usize,
-    start: usize,
-    held_back: usize,
-    downscale: u32,
+    run: &SegmentRun,
     validate: &[PathBuf],
 ) -> anyhow::Result<()> {
+    let &SegmentRun {
+        frames,
+        start,
+        held_back,
+        downscale,
+        search,
+    } = run;
     let suit = SuitDefinition::load_dir(suit_dir)?;
     let dataset = Dataset::open(data)?;
     if start + frames > dataset.frame_count() {
@@ -234,7 +256,8 @@ fn segment(
     }
     let validation = validation_frames(validate)?;
     let started = std::time::Instant::now();
-    let (tables, report) = train_segmenter(&training, &suit, downscale, held_back, &validation)?;
+    let (tables, report) =
+        train_segmenter(&training, &suit, downscale, held_back, &validation, search)?;
     tables.save(suit_dir)?;
     let w = report.weights;
     let others = match (report.default_validation_iou, report.chosen_validation_iou) {
@@ -245,7 +268,7 @@ fn segment(
         _ => String::new(),
     };
     println!(
-        "segmenter trained on frames {start}..{} of {} in {:.1} s: tables counted on the first {} frames, weights chosen on the last {}{} (coordinate search, {} runs): \
+        "segmenter trained on frames {start}..{} of {} in {:.1} s: tables counted on the first {} frames, weights chosen on the last {}{} ({}, {} runs): \
          σ_C {:.3}, σ_N {:.3}, σ_G {:.3}, σ_M {:.3}, σ_T {:.3}; held-back mean IoU {:.4} (all weights 1: {:.4}){others}; final tables counted on all {} frames; written to {}",
         start + frames,
         data.display(),
@@ -264,6 +287,10 @@ fn segment(
                     .collect::<Vec<_>>()
                     .join(", ")
             )
+        },
+        match search {
+            WeightSearch::Coordinate => "coordinate search",
+            WeightSearch::Pairs => "coordinate and pair search",
         },
         report.evaluations,
         w.colour,
@@ -564,6 +591,24 @@ fn training_set(
     Ok((x, y, n))
 }
 
+/// How the segmenter's term weights are searched for (`--search`; see `suitcap::segment::train`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum SearchArg {
+    /// One weight at a time (two passes).
+    Coordinate,
+    /// Then two weights at a time, until nothing improves.
+    Pairs,
+}
+
+impl From<SearchArg> for WeightSearch {
+    fn from(arg: SearchArg) -> WeightSearch {
+        match arg {
+            SearchArg::Coordinate => WeightSearch::Coordinate,
+            SearchArg::Pairs => WeightSearch::Pairs,
+        }
+    }
+}
+
 /// Masks the regressor's training descriptors are computed with (`--masks`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 enum TrainingMasks {
@@ -772,17 +817,30 @@ impl TrainingData {
     }
 }
 
-fn train_suit(
-    suit_dir: &Path,
-    data: &[PathBuf],
+/// How `suitcap-train suit` trains (its options but the suit and the data).
+struct SuitRun<'a> {
+    /// Candidate basis functions S.
     basis: usize,
-    descriptor: &str,
+    descriptor: &'a str,
+    /// Kernel width; `None`: chosen on held-back motions.
     width: Option<f32>,
     seed: u64,
     masks: TrainingMasks,
-) -> anyhow::Result<()> {
+    /// The segmenter's weight search, if the segmenter is trained.
+    search: WeightSearch,
+}
+
+fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap::pose::regressor::Regressor;
+    let &SuitRun {
+        basis,
+        descriptor,
+        width,
+        seed,
+        masks,
+        search,
+    } = run;
     let started = std::time::Instant::now();
     let mut kind = DescriptorKind::parse(descriptor)
         .with_context(|| format!("--descriptor '{descriptor}'"))?;
@@ -818,7 +876,14 @@ fn train_suit(
             start + SEGMENTER_FRAMES,
             dir.display()
         );
-        segment(suit_dir, dir, SEGMENTER_FRAMES, start, 6, 2, &[])?;
+        let run = SegmentRun {
+            frames: SEGMENTER_FRAMES,
+            start,
+            held_back: 6,
+            downscale: 2,
+            search,
+        };
+        segment(suit_dir, dir, &run, &[])?;
     } else {
         println!("stage 1/3: segmenter present");
     }
@@ -1355,9 +1420,17 @@ fn main() -> ExitCode {
             held_back,
             downscale,
             validate,
-        } => segment(
-            suit, data, *frames, *start, *held_back, *downscale, validate,
-        ),
+            search,
+        } => {
+            let run = SegmentRun {
+                frames: *frames,
+                start: *start,
+                held_back: *held_back,
+                downscale: *downscale,
+                search: (*search).into(),
+            };
+            segment(suit, data, &run, validate)
+        }
         Command::Codebooks {
             suit,
             data,
@@ -1372,7 +1445,18 @@ fn main() -> ExitCode {
             width,
             seed,
             masks,
-        } => train_suit(suit, data, *basis, descriptor, *width, *seed, *masks),
+            search,
+        } => {
+            let run = SuitRun {
+                basis: *basis,
+                descriptor,
+                width: *width,
+                seed: *seed,
+                masks: *masks,
+                search: (*search).into(),
+            };
+            train_suit(suit, data, &run)
+        }
         Command::Experiments {
             suit,
             train,
