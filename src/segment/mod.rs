@@ -21,6 +21,6 @@ pub mod train;
 pub use segmenter::{Segmentation, Segmenter, SegmenterOptions, StageTimes};
 pub use tables::{SegmenterTables, Weights};
 pub use train::{
-    search_weights, train_segmenter, SearchOutcome, TrainReport, TrainingFrame, WeightSearch,
-    MAX_VALIDATION_FRAMES, MIN_VALIDATION_FRAMES,
+    search_weights, train_segmenter, SearchOutcome, SearchStep, TrainReport, TrainingFrame,
+    WeightSearch, MAX_VALIDATION_FRAMES, MIN_VALIDATION_FRAMES,
 };

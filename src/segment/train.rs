@@ -109,14 +109,25 @@ pub struct SearchOutcome<S> {
     pub evaluations: usize,
 }
 
+/// Where a weight search stands, after each score it computed (for a progress display).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SearchStep {
+    /// Scores computed so far.
+    pub evaluations: usize,
+    /// The best weights so far and their objective.
+    pub weights: Weights,
+    pub objective: f64,
+}
+
 /// Searches the term weights from all ones for the largest `objective` of what `evaluate` returns
-/// (see the module docs).
+/// (see the module docs); `on_step` hears of every score computed.
 pub fn search_weights<S: Copy>(
     search: WeightSearch,
     evaluate: impl FnMut(Weights) -> S,
     objective: impl Fn(&S) -> f64,
+    on_step: impl FnMut(SearchStep),
 ) -> SearchOutcome<S> {
-    let mut climb = Climb::new(evaluate, objective);
+    let mut climb = Climb::new(evaluate, objective, on_step);
     let start = climb.best;
     for _ in 0..2 {
         climb.coordinate_pass();
@@ -139,25 +150,38 @@ pub fn search_weights<S: Copy>(
 }
 
 /// The state of a weight search: the best weights so far and their score.
-struct Climb<S, E, O> {
+struct Climb<S, E, O, P> {
     evaluate: E,
     objective: O,
+    on_step: P,
     weights: Weights,
     best: S,
     evaluations: usize,
 }
 
-impl<S: Copy, E: FnMut(Weights) -> S, O: Fn(&S) -> f64> Climb<S, E, O> {
-    fn new(mut evaluate: E, objective: O) -> Self {
+impl<S: Copy, E: FnMut(Weights) -> S, O: Fn(&S) -> f64, P: FnMut(SearchStep)> Climb<S, E, O, P> {
+    fn new(mut evaluate: E, objective: O, on_step: P) -> Self {
         let weights = Weights::default();
         let best = evaluate(weights);
-        Climb {
+        let mut climb = Climb {
             evaluate,
             objective,
+            on_step,
             weights,
             best,
             evaluations: 1,
-        }
+        };
+        climb.report();
+        climb
+    }
+
+    fn report(&mut self) {
+        let step = SearchStep {
+            evaluations: self.evaluations,
+            weights: self.weights,
+            objective: (self.objective)(&self.best),
+        };
+        (self.on_step)(step);
     }
 
     /// Scores `trial` and keeps it if it is better; says whether it was.
@@ -169,6 +193,7 @@ impl<S: Copy, E: FnMut(Weights) -> S, O: Fn(&S) -> f64> Climb<S, E, O> {
             self.best = score;
             self.weights = Weights::from_array(trial);
         }
+        self.report();
         better
     }
 
@@ -372,6 +397,7 @@ pub fn train_segmenter(
     held_back: usize,
     validation: &[Vec<TrainingFrame>],
     search: WeightSearch,
+    on_step: impl FnMut(SearchStep),
 ) -> Result<(SegmenterTables, TrainReport), TrainError> {
     if !(1..=8).contains(&factor) {
         return Err(TrainError::BadDownscale(factor));
@@ -446,7 +472,7 @@ pub fn train_segmenter(
         }
     };
     let outcome = if held_back > 0 {
-        search_weights(search, evaluate, Score::objective)
+        search_weights(search, evaluate, Score::objective, on_step)
     } else {
         let nothing = Score {
             held_back: 0.0,
@@ -542,9 +568,16 @@ mod tests {
     #[test]
     fn learns_a_person_that_moves_over_a_checkerboard() {
         let frames = synthetic_frames(12);
-        let (tables, report) =
-            train_segmenter(&frames[..10], &suit(), 1, 4, &[], WeightSearch::Pairs)
-                .expect("trains");
+        let (tables, report) = train_segmenter(
+            &frames[..10],
+            &suit(),
+            1,
+            4,
+            &[],
+            WeightSearch::Pairs,
+            |_| {},
+        )
+        .expect("trains");
         assert!(report.chosen_iou >= report.default_iou);
         assert!(report.chosen_iou > 0.95, "{report:?}");
         assert_eq!(report.chosen_validation_iou, None);
@@ -566,8 +599,8 @@ mod tests {
     #[test]
     fn the_flow_is_the_cost_of_the_cut_it_returns() {
         let frames = synthetic_frames(6);
-        let (tables, _) =
-            train_segmenter(&frames, &suit(), 2, 0, &[], WeightSearch::Pairs).expect("trains");
+        let (tables, _) = train_segmenter(&frames, &suit(), 2, 0, &[], WeightSearch::Pairs, |_| {})
+            .expect("trains");
         let mut seg = Segmenter::new(tables, &suit(), SegmenterOptions::default());
         seg.build_graph(&frames[3].image);
         let graph = seg.graph().clone();
@@ -584,13 +617,13 @@ mod tests {
     fn too_few_frames_or_mismatched_masks_are_errors() {
         let frames = synthetic_frames(4);
         assert!(matches!(
-            train_segmenter(&frames, &suit(), 2, 4, &[], WeightSearch::Pairs),
+            train_segmenter(&frames, &suit(), 2, 4, &[], WeightSearch::Pairs, |_| {}),
             Err(TrainError::TooFewFrames { .. })
         ));
         let mut bad = synthetic_frames(5);
         bad[2].mask = Mask::empty(10, 10);
         assert!(matches!(
-            train_segmenter(&bad, &suit(), 2, 0, &[], WeightSearch::Pairs),
+            train_segmenter(&bad, &suit(), 2, 0, &[], WeightSearch::Pairs, |_| {}),
             Err(TrainError::SizeMismatch { index: 2, .. })
         ));
     }
@@ -600,9 +633,16 @@ mod tests {
         let frames = synthetic_frames(10);
         // Another room, with the cloth's own green in its checkerboard.
         let other = synthetic_frames_over(8, [[110, 170, 70], [200, 190, 170]]);
-        let (_, report) =
-            train_segmenter(&frames, &suit(), 1, 4, &[other], WeightSearch::Coordinate)
-                .expect("trains");
+        let (_, report) = train_segmenter(
+            &frames,
+            &suit(),
+            1,
+            4,
+            &[other],
+            WeightSearch::Coordinate,
+            |_| {},
+        )
+        .expect("trains");
         assert_eq!(report.validation_sequences, 1);
         let default = report.default_validation_iou.expect("scored");
         let chosen = report.chosen_validation_iou.expect("scored");
@@ -623,10 +663,11 @@ mod tests {
             let (a, b) = (w.colour.log2() as f64, w.neighbourhood.log2() as f64);
             -10.0 * (a - b).powi(2) - (a + b - 4.0).powi(2)
         };
-        let coordinate = search_weights(WeightSearch::Coordinate, |w| w, objective);
+        let coordinate = search_weights(WeightSearch::Coordinate, |w| w, objective, |_| {});
         assert_eq!(coordinate.weights, Weights::default());
         assert_eq!(coordinate.evaluations, 1 + 2 * WEIGHTS * 4);
-        let pairs = search_weights(WeightSearch::Pairs, |w| w, objective);
+        let mut steps = Vec::new();
+        let pairs = search_weights(WeightSearch::Pairs, |w| w, objective, |s| steps.push(s));
         assert_eq!(
             (pairs.weights.colour, pairs.weights.neighbourhood),
             (4.0, 4.0)
@@ -644,6 +685,12 @@ mod tests {
         // Two rounds move (to 2, then 4), the third finds nothing and ends the search.
         let round = WEIGHTS * (WEIGHTS - 1) / 2 * 4 + WEIGHTS * 4;
         assert_eq!(pairs.evaluations, coordinate.evaluations + 3 * round);
+        // One step per score, each with the best so far, which never gets worse.
+        assert_eq!(steps.len(), pairs.evaluations);
+        assert_eq!(steps[0].objective, -16.0);
+        assert!(steps.windows(2).all(|w| w[1].objective >= w[0].objective));
+        let last = steps[steps.len() - 1];
+        assert_eq!((last.weights, last.objective), (pairs.weights, 0.0));
     }
 
     #[test]
@@ -656,7 +703,8 @@ mod tests {
                 2,
                 4,
                 &[synthetic_frames(2)],
-                WeightSearch::Pairs
+                WeightSearch::Pairs,
+                |_| {}
             )
             .map(|_| ()),
             Err(TrainError::ShortValidation {
@@ -673,7 +721,8 @@ mod tests {
                 2,
                 4,
                 &[synthetic_frames(3), bad],
-                WeightSearch::Pairs
+                WeightSearch::Pairs,
+                |_| {}
             ),
             Err(TrainError::ValidationSizeMismatch {
                 sequence: 1,

@@ -62,9 +62,16 @@ fn trained_on_one_sequence_it_segments_another() {
         train.manifest.scene.as_ref().map(|s| &s.backgrounds),
         test.manifest.scene.as_ref().map(|s| &s.backgrounds)
     );
-    let (tables, report) =
-        train_segmenter(&frames(&train), &suit, 2, 4, &[], WeightSearch::default())
-            .expect("trains");
+    let (tables, report) = train_segmenter(
+        &frames(&train),
+        &suit,
+        2,
+        4,
+        &[],
+        WeightSearch::default(),
+        |_| {},
+    )
+    .expect("trains");
     assert!(report.chosen_iou >= report.default_iou);
 
     let mut segmenter = Segmenter::new(tables.clone(), &suit, SegmenterOptions::default());

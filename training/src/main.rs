@@ -16,7 +16,8 @@ use clap::{Parser, Subcommand};
 use suitcap::dataset::Dataset;
 use suitcap::mask::Mask;
 use suitcap::segment::{
-    train_segmenter, TrainingFrame, WeightSearch, MAX_VALIDATION_FRAMES, MIN_VALIDATION_FRAMES,
+    train_segmenter, SearchStep, TrainingFrame, WeightSearch, MAX_VALIDATION_FRAMES,
+    MIN_VALIDATION_FRAMES,
 };
 use suitcap::stats::median;
 use suitcap::suit::SuitDefinition;
@@ -256,8 +257,37 @@ fn segment(
     }
     let validation = validation_frames(validate)?;
     let started = std::time::Instant::now();
-    let (tables, report) =
-        train_segmenter(&training, &suit, downscale, held_back, &validation, search)?;
+    // The search runs the segmenter hundreds of times (minutes with other sequences to score).
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} term weights: {msg} [{elapsed}]")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    let show_step = |step: SearchStep| {
+        let w = step.weights;
+        bar.set_message(format!(
+            "{} runs, best {:.4} at σ {}, {}, {}, {}, {}",
+            step.evaluations,
+            step.objective,
+            w.colour,
+            w.neighbourhood,
+            w.gradient,
+            w.motion,
+            w.temporal
+        ));
+        bar.tick();
+    };
+    let trained = train_segmenter(
+        &training,
+        &suit,
+        downscale,
+        held_back,
+        &validation,
+        search,
+        show_step,
+    );
+    bar.finish_and_clear();
+    let (tables, report) = trained?;
     tables.save(suit_dir)?;
     let w = report.weights;
     let others = match (report.default_validation_iou, report.chosen_validation_iou) {
