@@ -213,6 +213,9 @@ enum Command {
         /// Also write a JSON summary.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Also write one row per frame: its errors, the root's, or that nobody was found.
+        #[arg(long)]
+        frames_csv: Option<PathBuf>,
     },
 }
 
@@ -1083,13 +1086,58 @@ fn coverage(suit_dir: &Path, train: &[PathBuf], data: &[PathBuf]) -> anyhow::Res
 /// Per-dataset results of an evaluation: (dataset, mean Euler error, mean geodesic error, frames).
 type DatasetErrors = Vec<(String, f64, f64, usize)>;
 
+/// One evaluated frame: its mean joint-angle errors and the root's error, `None` where nobody
+/// was found (or, for the pixels, the root projects behind the camera).
+#[derive(Clone, Debug, PartialEq)]
+struct FrameError {
+    /// Index into the evaluated datasets.
+    dataset: usize,
+    frame: usize,
+    /// Mean over the joints, Euler and geodesic, degrees.
+    angles_deg: Option<(f64, f64)>,
+    /// The root after the correction and registration: world distance (cm), image distance (px).
+    root_cm: Option<f64>,
+    root_px: Option<f64>,
+}
+
+/// `--frames-csv`: one row per frame, empty fields where there is no figure.
+fn frames_csv(datasets: &[String], frames: &[FrameError]) -> String {
+    let mut text = String::from("dataset,frame,person,euler_deg,geodesic_deg,root_cm,root_px\n");
+    let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.3}"));
+    for f in frames {
+        let dataset = datasets.get(f.dataset).map_or("", String::as_str);
+        text.push_str(&format!(
+            "{dataset},{},{},{},{},{},{}\n",
+            f.frame,
+            u8::from(f.angles_deg.is_some()),
+            opt(f.angles_deg.map(|a| a.0)),
+            opt(f.angles_deg.map(|a| a.1)),
+            opt(f.root_cm),
+            opt(f.root_px)
+        ));
+    }
+    text
+}
+
+/// The frame with the largest mean Euler error among `frames`, with that error.
+fn worst_frame(frames: &[FrameError]) -> Option<(usize, f64)> {
+    frames
+        .iter()
+        .filter_map(|f| f.angles_deg.map(|a| (f.frame, a.0)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
 /// Runs a trained suit over datasets with ground truth and accumulates the joint errors.
 fn evaluate(
     suit_dir: &Path,
     data: &[PathBuf],
     truth_masks: bool,
     verbose: bool,
-) -> anyhow::Result<(suitcap::pose::eval::JointErrors, DatasetErrors)> {
+) -> anyhow::Result<(
+    suitcap::pose::eval::JointErrors,
+    DatasetErrors,
+    Vec<FrameError>,
+)> {
     use suitcap::pipeline::PosePipeline;
     use suitcap::pose::eval::JointErrors;
     let mut pipeline = PosePipeline::load(suit_dir)?;
@@ -1125,7 +1173,8 @@ fn evaluate(
     // Estimated over true root depth along the optical axis, after the correction: per dataset and all.
     let mut depth_ratios_all = Vec::new();
     let mut depth_ratio_medians = Vec::new();
-    for dir in data {
+    let mut per_frame = Vec::new();
+    for (dataset_index, dir) in data.iter().enumerate() {
         let dataset = Dataset::open(dir)?;
         let layout =
             suitcap::pose::PoseLayout::new(&pipeline.suit.skeleton, &dataset.motion.skeleton)?;
@@ -1149,6 +1198,7 @@ fn evaluate(
             glam::Vec3::from_array(layout.root_position.map(|c| values[c]))
                 + dataset.motion.skeleton.joint(0).offset
         };
+        let first_frame = per_frame.len();
         for index in 0..dataset.frame_count() {
             let image = read_frame(&dataset, index)?;
             // The dataset's masks are read only when asked for: a recording may have few.
@@ -1158,12 +1208,23 @@ fn evaluate(
                 None
             };
             let result = pipeline.process(&image, &dataset.camera, truth.as_ref());
+            let mut record = FrameError {
+                dataset: dataset_index,
+                frame: index,
+                angles_deg: None,
+                root_cm: None,
+                root_px: None,
+            };
             if !result.person {
                 missed += 1;
                 filters.iter_mut().for_each(PoseFilter::reset);
+                per_frame.push(record);
                 continue;
             }
             errors.add(&layout, dataset.motion.frame(index), &result.frame);
+            let mut this_frame = JointErrors::new(names.clone());
+            this_frame.add(&layout, dataset.motion.frame(index), &result.frame);
+            record.angles_deg = Some((this_frame.mean_euler(), this_frame.mean_geodesic()));
             for (filter, variant) in filters.iter_mut().zip(variants.iter_mut()) {
                 let mut filtered = result.frame.clone();
                 filter.apply(index as f64 * frame_time, &mut filtered);
@@ -1179,6 +1240,7 @@ fn evaluate(
                 + pipeline.regressor.skeleton.skeleton.joint(0).offset;
             root.0 += before.distance(truth_root) as f64;
             root.1 += after.distance(truth_root) as f64;
+            record.root_cm = Some(after.distance(truth_root) as f64);
             let camera = &dataset.camera;
             if let (Some(t), Some(b), Some(a)) = (
                 camera.project(truth_root),
@@ -1187,15 +1249,20 @@ fn evaluate(
             ) {
                 root_pixels.0 += b.pixel.distance(t.pixel) as f64;
                 root_pixels.1 += a.pixel.distance(t.pixel) as f64;
+                record.root_px = Some(a.pixel.distance(t.pixel) as f64);
                 root_pixels.2 += 1;
                 depth_ratios.push(a.depth / t.depth);
             }
             root.2 += 1;
             root.3 += result.correction.is_some() as usize;
+            per_frame.push(record);
         }
         if verbose {
+            let worst = worst_frame(&per_frame[first_frame..]).map_or(String::new(), |(k, e)| {
+                format!("; worst frame {k} ({e:.2}°)")
+            });
             println!(
-                "{}: {} frames ({} with nobody found), clip {}, subject {}: mean joint angle error {:.2}° (Euler), {:.2}° (geodesic)",
+                "{}: {} frames ({} with nobody found), clip {}, subject {}: mean joint angle error {:.2}° (Euler), {:.2}° (geodesic){worst}",
                 dir.display(),
                 dataset.frame_count(),
                 missed,
@@ -1256,7 +1323,7 @@ fn evaluate(
             );
         }
     }
-    Ok((all, per_dataset))
+    Ok((all, per_dataset, per_frame))
 }
 
 fn eval(
@@ -1265,8 +1332,14 @@ fn eval(
     truth_masks: bool,
     csv: Option<&PathBuf>,
     json: Option<&PathBuf>,
+    frames: Option<&PathBuf>,
 ) -> anyhow::Result<()> {
-    let (all, per_dataset) = evaluate(suit_dir, data, truth_masks, true)?;
+    let (all, per_dataset, per_frame) = evaluate(suit_dir, data, truth_masks, true)?;
+    if let Some(path) = frames {
+        let names: Vec<String> = per_dataset.iter().map(|d| d.0.clone()).collect();
+        suitcap::io::write_atomic(path, frames_csv(&names, &per_frame).as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
     let names = all.names.clone();
     println!("{:<18} {:>9} {:>9}", "joint", "Euler °", "geodesic °");
     for (j, name) in names.iter().enumerate() {
@@ -1387,7 +1460,7 @@ fn experiments(
                 layout: layout.clone(),
             }
             .save(&variant)?;
-            let (errors, _) = evaluate(&variant, data, false, false)?;
+            let (errors, _, _) = evaluate(&variant, data, false, false)?;
             println!(
                 "  S = {basis}: {} relevance vectors ({:.1} s), mean joint angle error {:.2}° (Euler), {:.2}° (geodesic)",
                 report.relevance_vectors,
@@ -1534,7 +1607,15 @@ fn main() -> ExitCode {
             truth_masks,
             csv,
             json,
-        } => eval(suit, data, *truth_masks, csv.as_ref(), json.as_ref()),
+            frames_csv,
+        } => eval(
+            suit,
+            data,
+            *truth_masks,
+            csv.as_ref(),
+            json.as_ref(),
+            frames_csv.as_ref(),
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -1547,7 +1628,9 @@ fn main() -> ExitCode {
 
 #[cfg(test)]
 mod tests {
-    use super::{clip_indices, held_back, training_set, validation_run};
+    use super::{
+        clip_indices, frames_csv, held_back, training_set, validation_run, worst_frame, FrameError,
+    };
     use std::path::{Path, PathBuf};
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap_tools::synth::SynthOptions;
@@ -1625,6 +1708,44 @@ mod tests {
                 assert_eq!(alone_poses, poses);
             }
         }
+    }
+
+    #[test]
+    fn the_frames_csv_has_a_row_per_frame_and_blanks_where_nobody_was_found() {
+        let frames = [
+            FrameError {
+                dataset: 0,
+                frame: 0,
+                angles_deg: Some((4.25, 9.5)),
+                root_cm: Some(12.0),
+                root_px: Some(3.5),
+            },
+            FrameError {
+                dataset: 0,
+                frame: 1,
+                angles_deg: None,
+                root_cm: None,
+                root_px: None,
+            },
+            FrameError {
+                dataset: 1,
+                frame: 0,
+                angles_deg: Some((7.0, 11.0)),
+                root_cm: Some(2.0),
+                root_px: None,
+            },
+        ];
+        let text = frames_csv(&["a".into(), "b".into()], &frames);
+        assert_eq!(
+            text,
+            "dataset,frame,person,euler_deg,geodesic_deg,root_cm,root_px\n\
+             a,0,1,4.250,9.500,12.000,3.500\n\
+             a,1,0,,,,\n\
+             b,0,1,7.000,11.000,2.000,\n"
+        );
+        // The worst frame of the first dataset, the missed frame left out.
+        assert_eq!(worst_frame(&frames[..2]), Some((0, 4.25)));
+        assert_eq!(worst_frame(&frames[1..2]), None);
     }
 
     #[test]
