@@ -6,7 +6,8 @@
 //! over the video does. Here the template body (head, hands and shoes included, as in the
 //! segmenter's masks), posed by the frame, is rasterized on a grid about 160 cells wide (a quarter
 //! of the resolution at 640 × 480; [`BodyMasker`]), and the integer shift within ±15 % of the image width that puts most model
-//! pixels on the (block-reduced) silhouette is found coarse to fine; the root moves parallel to the
+//! pixels on the (block-reduced) silhouette, less a cost growing with the square of the shift
+//! ([`SHIFT_PENALTY`]), is found coarse to fine; the root moves parallel to the
 //! image plane by that shift × depth / focal length. Overlap, unlike aligning centroids, is not
 //! dragged by a segmentation leak or by legs leaving the picture: a leak adds the same pixels to
 //! every candidate shift that does not reach it. Depth is left alone: in one view it trades off
@@ -23,6 +24,20 @@ use crate::skeleton::Skeleton;
 
 /// The search reaches this share of the image width in every direction.
 const MAX_SHIFT_FRACTION: f32 = 0.15;
+
+/// What a shift costs, in overlapping cells per squared cell of shift (on the grid of
+/// [`Registration::cells_across`] cells, so alike at every resolution; the body's area and a
+/// misplacement of a given share of its height both grow with the square of its size, so alike
+/// at every distance too). Without it the largest overlap alone decided, and where the estimated
+/// pose differs from the person's (a kick's raised leg, a lean towards the camera with the legs
+/// leaving the picture) a shift of the wrong shape onto other parts of the silhouette overlapped a
+/// few cells more: on the bundled demo's frame 43 it moved the root 68 pixels down, 57 pixels from
+/// the truth where the regressor alone was 17 off. Chosen on nine fresh renderings of training
+/// motions (every third clip of a fifth rendering, seeds 2101–2127; mean image distance of the
+/// root after correction and registration 8.5 px without it, 7.3 / 7.0 / 7.1 px at ½, 1, 2);
+/// then on the six pose test sequences 9.3 → 8.0 px (10.5 → 9.9 cm) and on the demo 13.0 → 10.0
+/// px (docs/measurements.md, fourth session of 2026-12-05).
+const SHIFT_PENALTY: f64 = 1.0;
 
 /// The registration of one stream: the template body's meshes and scratch buffers.
 #[derive(Clone, Debug)]
@@ -74,7 +89,7 @@ impl Registration {
             small.intrinsics.height,
         );
         let reach = (MAX_SHIFT_FRACTION * small.intrinsics.width as f32) as i32;
-        let (dx, dy) = best_overlap(&model, &target, reach)?;
+        let (dx, dy) = best_overlap(&model, &target, reach, SHIFT_PENALTY)?;
         let shift = Vec2::new(dx as f32, dy as f32) * factor;
         let root_world = self.world.first().map(|t| Vec3::from(t.translation))?;
         let depth = camera.to_camera(root_world).z;
@@ -110,24 +125,30 @@ pub fn block_mask(mask: &Mask, factor: u32, width: u32, height: u32) -> Mask {
 }
 
 /// The integer shift (within ±`reach` cells) that puts most of `model`'s pixels on `target`
-/// (same size), searched coarse to fine; ties go to the smaller shift. `None` when no shift
-/// overlaps at all. The masks are compared as rows of bits, 64 cells a word: a shift's overlap is
+/// (same size), less `shift_penalty` × its squared length in cells, searched coarse to fine; ties
+/// go to the smaller shift. `None` when the shift found overlaps nothing. The masks are compared as rows of bits, 64 cells a word: a shift's overlap is
 /// the popcount of each model row AND the target's row shifted, three words a row on the
 /// 160-cell-wide grid, where one test per model cell took 1,500–2,000 per shift (about 650 shifts;
 /// the root stage took 0.5 ms longer per 640×480 frame that way).
-pub fn best_overlap(model: &Mask, target: &Mask, reach: i32) -> Option<(i32, i32)> {
+pub fn best_overlap(
+    model: &Mask,
+    target: &Mask,
+    reach: i32,
+    shift_penalty: f64,
+) -> Option<(i32, i32)> {
     let model = BitRows::new(model);
     let target = BitRows::new(target);
     let rows = model.set_rows()?;
-    let hits = |dx: i32, dy: i32| overlap(&model, rows.clone(), &target, dx, dy) as i64;
-    let better = |a: (i64, i32, i32), b: (i64, i32, i32)| {
+    let hits = |dx: i32, dy: i32| overlap(&model, rows.clone(), &target, dx, dy);
+    let score = |dx: i32, dy: i32| hits(dx, dy) as f64 - shift_penalty * (dx * dx + dy * dy) as f64;
+    let better = |a: (f64, i32, i32), b: (f64, i32, i32)| {
         a.0 > b.0 || (a.0 == b.0 && a.1 * a.1 + a.2 * a.2 < b.1 * b.1 + b.2 * b.2)
     };
-    let mut best = (hits(0, 0), 0, 0);
+    let mut best = (score(0, 0), 0, 0);
     let coarse = 2;
     for dy in (-reach..=reach).step_by(coarse as usize) {
         for dx in (-reach..=reach).step_by(coarse as usize) {
-            let candidate = (hits(dx, dy), dx, dy);
+            let candidate = (score(dx, dy), dx, dy);
             if better(candidate, best) {
                 best = candidate;
             }
@@ -136,13 +157,13 @@ pub fn best_overlap(model: &Mask, target: &Mask, reach: i32) -> Option<(i32, i32
     let (_, cx, cy) = best;
     for dy in cy - 1..=cy + 1 {
         for dx in cx - 1..=cx + 1 {
-            let candidate = (hits(dx, dy), dx, dy);
+            let candidate = (score(dx, dy), dx, dy);
             if better(candidate, best) {
                 best = candidate;
             }
         }
     }
-    (best.0 > 0).then_some((best.1, best.2))
+    (hits(best.1, best.2) > 0).then_some((best.1, best.2))
 }
 
 /// A mask's rows as bits: cell x of a row is bit x % 64 of the row's word x / 64; the bits past
@@ -345,7 +366,7 @@ mod tests {
                 let by_bits = overlap(&bm, bm.set_rows().unwrap_or(0..0), &bt, dx, dy);
                 proptest::prop_assert_eq!(by_bits as usize, overlap_by_pixels(&model, &target, dx, dy));
             }
-            if let Some((dx, dy)) = best_overlap(&model, &target, 4) {
+            if let Some((dx, dy)) = best_overlap(&model, &target, 4, 0.25) {
                 proptest::prop_assert!(overlap_by_pixels(&model, &target, dx, dy) > 0);
             }
         }
@@ -361,10 +382,30 @@ mod tests {
             })
         };
         assert_eq!(
-            best_overlap(&block(10, 3), &block(80, 5), 72),
+            best_overlap(&block(10, 3), &block(80, 5), 72, 0.0),
             Some((70, 2))
         );
-        assert_eq!(best_overlap(&block(10, 3), &Mask::empty(100, 8), 72), None);
+        assert_eq!(
+            best_overlap(&block(10, 3), &Mask::empty(100, 8), 72, 0.0),
+            None
+        );
+    }
+
+    #[test]
+    fn a_far_shift_must_overlap_more_than_it_costs() {
+        // The model's 3 × 2 block at (10, 3) overlaps a 2 × 2 piece at (11, 3) by 4 cells where
+        // it is, and a whole 3 × 2 block at (60, 3) by 6 cells 50 cells to the right.
+        let target = Mask::from_fn(100, 8, |x, y| {
+            (3..5).contains(&y) && ((11..13).contains(&x) || (60..63).contains(&x))
+        });
+        let model = Mask::from_fn(100, 8, |x, y| (3..5).contains(&y) && (10..13).contains(&x));
+        // Overlap alone: 6 cells beat 4. With a cell of overlap per squared cell of shift, the
+        // far block would cost 2,500: the model stays (a shift of 1 also overlaps 4 but costs 1).
+        assert_eq!(best_overlap(&model, &target, 60, 0.0), Some((50, 0)));
+        assert_eq!(best_overlap(&model, &target, 60, 1.0), Some((0, 0)));
+        // Nothing overlapping anywhere nearby, and too far to pay for: no shift.
+        let far = Mask::from_fn(100, 8, |x, y| (x, y) == (90, 3));
+        assert_eq!(best_overlap(&model, &far, 85, 1.0), None);
     }
 
     /// A body rendered 12 cm to the side of where the frame puts it is moved back onto it.

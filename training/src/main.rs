@@ -213,7 +213,8 @@ enum Command {
         /// Also write a JSON summary.
         #[arg(long)]
         json: Option<PathBuf>,
-        /// Also write one row per frame: its errors, the root's, or that nobody was found.
+        /// Also write one row per frame: its errors, the root's (also before the correction), or
+        /// that nobody was found.
         #[arg(long)]
         frames_csv: Option<PathBuf>,
     },
@@ -1095,25 +1096,30 @@ struct FrameError {
     frame: usize,
     /// Mean over the joints, Euler and geodesic, degrees.
     angles_deg: Option<(f64, f64)>,
-    /// The root after the correction and registration: world distance (cm), image distance (px).
+    /// The root after the correction and registration: world distance (cm), image distance (px);
+    /// and the image distance of the regressor's root alone.
     root_cm: Option<f64>,
     root_px: Option<f64>,
+    root_px_regressed: Option<f64>,
 }
 
 /// `--frames-csv`: one row per frame, empty fields where there is no figure.
 fn frames_csv(datasets: &[String], frames: &[FrameError]) -> String {
-    let mut text = String::from("dataset,frame,person,euler_deg,geodesic_deg,root_cm,root_px\n");
+    let mut text = String::from(
+        "dataset,frame,person,euler_deg,geodesic_deg,root_cm,root_px,root_px_regressed\n",
+    );
     let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.3}"));
     for f in frames {
         let dataset = datasets.get(f.dataset).map_or("", String::as_str);
         text.push_str(&format!(
-            "{dataset},{},{},{},{},{},{}\n",
+            "{dataset},{},{},{},{},{},{},{}\n",
             f.frame,
             u8::from(f.angles_deg.is_some()),
             opt(f.angles_deg.map(|a| a.0)),
             opt(f.angles_deg.map(|a| a.1)),
             opt(f.root_cm),
-            opt(f.root_px)
+            opt(f.root_px),
+            opt(f.root_px_regressed)
         ));
     }
     text
@@ -1214,6 +1220,7 @@ fn evaluate(
                 angles_deg: None,
                 root_cm: None,
                 root_px: None,
+                root_px_regressed: None,
             };
             if !result.person {
                 missed += 1;
@@ -1250,6 +1257,13 @@ fn evaluate(
                 root_pixels.0 += b.pixel.distance(t.pixel) as f64;
                 root_pixels.1 += a.pixel.distance(t.pixel) as f64;
                 record.root_px = Some(a.pixel.distance(t.pixel) as f64);
+                record.root_px_regressed = Some(b.pixel.distance(t.pixel) as f64);
+                if std::env::var_os("DBG_ROOT").is_some() {
+                    eprintln!(
+                        "DBG {index} corr {:?} reg {:?} truth {:?} before {:?} after {:?}",
+                        result.correction, result.registration, t.pixel, b.pixel, a.pixel
+                    );
+                }
                 root_pixels.2 += 1;
                 depth_ratios.push(a.depth / t.depth);
             }
@@ -1719,6 +1733,7 @@ mod tests {
                 angles_deg: Some((4.25, 9.5)),
                 root_cm: Some(12.0),
                 root_px: Some(3.5),
+                root_px_regressed: Some(5.0),
             },
             FrameError {
                 dataset: 0,
@@ -1726,6 +1741,7 @@ mod tests {
                 angles_deg: None,
                 root_cm: None,
                 root_px: None,
+                root_px_regressed: None,
             },
             FrameError {
                 dataset: 1,
@@ -1733,15 +1749,16 @@ mod tests {
                 angles_deg: Some((7.0, 11.0)),
                 root_cm: Some(2.0),
                 root_px: None,
+                root_px_regressed: None,
             },
         ];
         let text = frames_csv(&["a".into(), "b".into()], &frames);
         assert_eq!(
             text,
-            "dataset,frame,person,euler_deg,geodesic_deg,root_cm,root_px\n\
-             a,0,1,4.250,9.500,12.000,3.500\n\
-             a,1,0,,,,\n\
-             b,0,1,7.000,11.000,2.000,\n"
+            "dataset,frame,person,euler_deg,geodesic_deg,root_cm,root_px,root_px_regressed\n\
+             a,0,1,4.250,9.500,12.000,3.500,5.000\n\
+             a,1,0,,,,,\n\
+             b,0,1,7.000,11.000,2.000,,\n"
         );
         // The worst frame of the first dataset, the missed frame left out.
         assert_eq!(worst_frame(&frames[..2]), Some((0, 4.25)));
