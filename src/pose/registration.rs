@@ -35,8 +35,8 @@ const MAX_SHIFT_FRACTION: f32 = 0.15;
 /// the truth where the regressor alone was 17 off. Chosen on nine fresh renderings of training
 /// motions (every third clip of a fifth rendering, seeds 2101–2127; mean image distance of the
 /// root after correction and registration 8.5 px without it, 7.3 / 7.0 / 7.1 px at ½, 1, 2);
-/// then on the six pose test sequences 9.3 → 8.0 px (10.5 → 9.9 cm) and on the demo 13.0 → 10.0
-/// px (docs/measurements.md, fourth session of 2026-12-05).
+/// on the six pose test sequences 9.3 → 8.0 px (10.5 → 9.9 cm; ¼, 1 and 4 had been tried on them
+/// first) and on the demo 13.0 → 10.0 px (docs/measurements.md, fourth session of 2026-12-05).
 const SHIFT_PENALTY: f64 = 1.0;
 
 /// The registration of one stream: the template body's meshes and scratch buffers.
