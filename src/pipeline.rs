@@ -50,8 +50,10 @@ pub struct PoseFrame {
     pub markers: Vec<crate::descriptor::markers::DetectedMarker>,
     /// The regressed pose vector (empty when nobody was seen).
     pub pose: Vec<f32>,
-    /// Root position channels before the position correction, and the image shift it applied.
+    /// Root position channels before the position correction; the suit's depth the marker grid
+    /// gave (cm), where the root was put; the image shift onto the head, hand and shoe blobs.
     pub root_before_correction: [f32; 3],
+    pub marker_depth_cm: Option<f32>,
     pub correction: Option<glam::Vec2>,
     /// The image shift the silhouette registration applied to the root after the correction.
     pub registration: Option<glam::Vec2>,
@@ -69,8 +71,19 @@ pub struct PosePipeline {
     pose: Vec<f32>,
     correction_parts: Option<crate::pose::correction::CorrectionParts>,
     lut: crate::segment::features::ColourLut,
-    /// Move the root onto the head, hand and shoe blobs (on by default).
+    /// Put the root at the depth the marker grid gives, or where it gives none move it onto the
+    /// head, hand and shoe blobs (on by default).
     pub position_correction: bool,
+    /// Also move it onto the blobs when the markers gave the depth (off by default). The source
+    /// paper corrects the position by the head, hands and feet alone; with the depth from the
+    /// markers and the silhouette registration after it, the blobs' shift moved the root away
+    /// from the truth in the image on average, for the registration to undo: on nine fresh
+    /// renderings of training motions the root came out 7.0 px from the truth with the shift and
+    /// 6.2 px without; on the six pose test sequences 8.0 and 7.5 px (9.9 and 9.7 cm), on the
+    /// bundled demo 10.0 and 9.3 px; without the registration the shift left the six sequences'
+    /// root where the regressor put it (11.7 px) and the demo's worse (12.0 → 14.6 px)
+    /// (docs/measurements.md, fourth session of 2026-12-05).
+    pub landmarks_with_marker_depth: bool,
     /// Then centre the posed template body on the silhouette (on by default; `None` when the
     /// skeleton lacks the body model's joints).
     registration: Option<crate::pose::registration::Registration>,
@@ -117,6 +130,7 @@ impl PosePipeline {
             correction_parts,
             lut: crate::segment::features::ColourLut::new(),
             position_correction: true,
+            landmarks_with_marker_depth: false,
             registration,
             silhouette_registration: true,
         })
@@ -156,6 +170,7 @@ impl PosePipeline {
                 markers: Vec::new(),
                 pose: Vec::new(),
                 root_before_correction,
+                marker_depth_cm: None,
                 correction: None,
                 registration: None,
                 times,
@@ -174,22 +189,40 @@ impl PosePipeline {
             bbox,
         );
         let root_before_correction = self.regressor.layout.root_position.map(|c| frame[c]);
-        let correction = match (&self.correction_parts, self.position_correction) {
-            (Some(parts), true) => {
+        let marker_depth_cm = self
+            .position_correction
+            .then(|| {
+                crate::pose::correction::depth_from_markers(
+                    &markers.iter().map(|m| m.centre).collect::<Vec<_>>(),
+                    self.suit.pitch_cm(),
+                    camera.intrinsics.fy,
+                )
+            })
+            .flatten();
+        let skeleton = &self.regressor.skeleton.skeleton;
+        let root_position = self.regressor.layout.root_position;
+        let correction = match (&self.correction_parts, marker_depth_cm) {
+            (_, Some(depth)) if !self.landmarks_with_marker_depth => {
+                crate::pose::correction::root_to_depth(
+                    &mut frame,
+                    skeleton,
+                    root_position,
+                    camera,
+                    depth,
+                );
+                None
+            }
+            (Some(parts), _) if self.position_correction => {
                 let landmarks = crate::pose::correction::find_landmarks(image, &mask, &self.lut);
                 crate::pose::correction::correct_root(
                     &mut frame,
-                    &self.regressor.skeleton.skeleton,
-                    self.regressor.layout.root_position,
+                    skeleton,
+                    root_position,
                     parts,
                     camera,
                     &landmarks,
                     (y1 - y0) as f32,
-                    crate::pose::correction::depth_from_markers(
-                        &markers.iter().map(|m| m.centre).collect::<Vec<_>>(),
-                        self.suit.pitch_cm(),
-                        camera.intrinsics.fy,
-                    ),
+                    marker_depth_cm,
                 )
             }
             _ => None,
@@ -213,6 +246,7 @@ impl PosePipeline {
             markers,
             pose: self.pose.clone(),
             root_before_correction,
+            marker_depth_cm,
             correction,
             registration,
             times,

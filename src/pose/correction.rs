@@ -15,7 +15,10 @@
 //! away looks like a short one near by): markers sit on a grid of known pitch, so the typical distance
 //! between neighbouring marker centres in pixels gives the depth of the suit's surface
 //! ([`depth_from_markers`]); the root is put on its camera ray at that depth plus
-//! [`ROOT_BEHIND_SURFACE_CM`]. When this is available the landmark spread does not rescale the depth.
+//! [`ROOT_BEHIND_SURFACE_CM`] ([`root_to_depth`]). When this is available the landmark spread does
+//! not rescale the depth, and the pose pipeline uses the depth alone: the blobs' shift on top of it
+//! moved the root away from the truth in the image on average (see
+//! `PosePipeline::landmarks_with_marker_depth`); the silhouette registration places it instead.
 
 use glam::{Affine3A, Vec2, Vec3};
 use image::RgbImage;
@@ -182,6 +185,29 @@ impl CorrectionParts {
     }
 }
 
+/// Puts the root of `frame` on its camera ray at [`ROOT_BEHIND_SURFACE_CM`] behind the suit's
+/// surface at `surface_depth` (cm, from [`depth_from_markers`]): the depth alone, the root's pixel
+/// unchanged.
+pub fn root_to_depth(
+    frame: &mut [f32],
+    skeleton: &Skeleton,
+    root_position: [usize; 3],
+    camera: &Camera,
+    surface_depth: f32,
+) {
+    let mut world = Vec::new();
+    skeleton.forward_kinematics(frame, &mut world);
+    let Some(root) = world.first().map(|t| Vec3::from(t.translation)) else {
+        return;
+    };
+    if let Some(p) = camera.project(root) {
+        let moved = camera.unproject(p.pixel, surface_depth + ROOT_BEHIND_SURFACE_CM);
+        for (axis, &c) in root_position.iter().enumerate() {
+            frame[c] += moved[axis] - root[axis];
+        }
+    }
+}
+
 fn centre(part: &BodyPart, world: &[Affine3A]) -> Vec3 {
     world[part.joint].transform_point3((part.start + part.end) * 0.5)
 }
@@ -201,15 +227,7 @@ pub fn correct_root(
 ) -> Option<Vec2> {
     let mut world = Vec::new();
     if let Some(depth) = surface_depth {
-        // Put the root on its ray at the depth the marker grid says.
-        skeleton.forward_kinematics(frame, &mut world);
-        let root = Vec3::from(world[0].translation);
-        if let Some(p) = camera.project(root) {
-            let moved = camera.unproject(p.pixel, depth + ROOT_BEHIND_SURFACE_CM);
-            for (axis, &c) in root_position.iter().enumerate() {
-                frame[c] += moved[axis] - root[axis];
-            }
-        }
+        root_to_depth(frame, skeleton, root_position, camera, depth);
     }
     skeleton.forward_kinematics(frame, &mut world);
     let reach = 0.2 * silhouette_height;
@@ -362,5 +380,39 @@ mod tests {
         )
         .is_none());
         assert_eq!(untouched[0], truth[0] + 8.0);
+    }
+
+    #[test]
+    fn the_marker_depth_moves_the_root_along_its_ray() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let motion = crate::bvh::Motion::load(&root.join("tests/data/mocap/cmu_09_01_run.bvh"))
+            .expect("clip");
+        // The camera of the test above, 450 cm in front of the runner.
+        let camera = Camera::look_at(
+            crate::camera::Intrinsics::from_fov(640, 480, 60.0),
+            Vec3::new(0.0, 100.0, 450.0),
+            Vec3::new(0.0, 90.0, 0.0),
+            Vec3::Y,
+        );
+        let mut frame = motion.frame(60).to_vec();
+        let mut world = Vec::new();
+        motion.skeleton.forward_kinematics(&frame, &mut world);
+        let before = camera
+            .project(Vec3::from(world[0].translation))
+            .expect("visible");
+        root_to_depth(&mut frame, &motion.skeleton, [0, 1, 2], &camera, 250.0);
+        motion.skeleton.forward_kinematics(&frame, &mut world);
+        let after = camera
+            .project(Vec3::from(world[0].translation))
+            .expect("visible");
+        // Same pixel, the depth the markers say plus the root's distance behind the surface.
+        assert!(
+            after.pixel.distance(before.pixel) < 1e-3,
+            "{after:?} {before:?}"
+        );
+        assert!(
+            (after.depth - (250.0 + ROOT_BEHIND_SURFACE_CM)).abs() < 1e-2,
+            "{after:?}"
+        );
     }
 }

@@ -1174,6 +1174,8 @@ fn evaluate(
     .collect();
     // Root position error sums (cm) before and after the position correction, frames, corrected frames.
     let mut root = (0.0f64, 0.0f64, 0usize, 0usize);
+    // Frames whose root depth came from the marker grid.
+    let mut marker_depth_frames = 0usize;
     // Root reprojection error (pixels) before and after: what decides where a garment is drawn.
     let mut root_pixels = (0.0f64, 0.0f64, 0usize);
     // Estimated over true root depth along the optical axis, after the correction: per dataset and all.
@@ -1269,6 +1271,7 @@ fn evaluate(
             }
             root.2 += 1;
             root.3 += result.correction.is_some() as usize;
+            marker_depth_frames += result.marker_depth_cm.is_some() as usize;
             per_frame.push(record);
         }
         if verbose {
@@ -1320,11 +1323,12 @@ fn evaluate(
     }
     if verbose && root.2 > 0 {
         println!(
-            "root position error: {:.1} cm from the regressor alone, {:.1} cm after the position correction (depth from the marker pitch, head, hands and shoes by colour; {} of {} frames corrected) and the silhouette registration",
+            "root position error: {:.1} cm from the regressor alone, {:.1} cm after the position correction (depth from the marker pitch in {} of {} frames; moved onto the head, hands and shoes by colour in {}) and the silhouette registration",
             root.0 / root.2 as f64,
             root.1 / root.2 as f64,
-            root.3,
-            root.2
+            marker_depth_frames,
+            root.2,
+            root.3
         );
         let per: Vec<String> = depth_ratio_medians
             .iter()
