@@ -50,10 +50,11 @@ pub struct PoseFrame {
     pub markers: Vec<crate::descriptor::markers::DetectedMarker>,
     /// The regressed pose vector (empty when nobody was seen).
     pub pose: Vec<f32>,
-    /// Root position channels before the position correction; the suit's depth the marker grid
-    /// gave (cm), where the root was put; the image shift onto the head, hand and shoe blobs.
+    /// Root position channels before the position correction.
     pub root_before_correction: [f32; 3],
+    /// The depth of the suit's surface the marker grid gave (cm), where the root was put.
     pub marker_depth_cm: Option<f32>,
+    /// The image shift onto the head, hand and shoe blobs, where that correction ran.
     pub correction: Option<glam::Vec2>,
     /// The image shift the silhouette registration applied to the root after the correction.
     pub registration: Option<glam::Vec2>,
@@ -79,7 +80,7 @@ pub struct PosePipeline {
     /// markers and the silhouette registration after it, the blobs' shift moved the root away
     /// from the truth in the image on average, for the registration to undo: on nine fresh
     /// renderings of training motions the root came out 7.0 px from the truth with the shift and
-    /// 6.2 px without; on the six pose test sequences 8.0 and 7.5 px (9.9 and 9.7 cm), on the
+    /// 6.2 px without (the registration's penalty then at 1); on the six pose test sequences 8.0 and 7.5 px (9.9 and 9.7 cm), on the
     /// bundled demo 10.0 and 9.3 px; without the registration the shift left the six sequences'
     /// root where the regressor put it (11.7 px) and the demo's worse (12.0 → 14.6 px)
     /// (docs/measurements.md, fourth session of 2026-12-05).
