@@ -44,29 +44,13 @@ enum Command {
         suit: PathBuf,
         #[arg(long)]
         data: PathBuf,
-        /// Number of consecutive frames used.
-        #[arg(long, default_value_t = 20)]
-        frames: usize,
-        /// First frame used.
-        #[arg(long, default_value_t = 0)]
-        start: usize,
-        /// Of those, the last N are held back to choose the term weights.
-        #[arg(long, default_value_t = 6)]
-        held_back: usize,
+        #[command(flatten)]
+        run: SegmentRun,
         /// Another dataset (another room, person, light) whose first run of consecutive masked
         /// frames (24 to 60 of them) is scored in the weights' search too (repeatable): the
         /// held-back frames share the training frames' room.
         #[arg(long = "validate")]
         validate: Vec<PathBuf>,
-        /// The cut runs on frames box-downscaled by this factor (taller frames at run time may be
-        /// cut at a larger one that keeps at least 1.5 times the rows of the grid trained on; see
-        /// `SegmenterTables::cut_factor`).
-        #[arg(long, default_value_t = 2)]
-        downscale: u32,
-        /// How the term weights are searched for: `pairs` (default) also moves two weights at
-        /// once; `coordinate` one at a time only (as the shipped suit's were chosen).
-        #[arg(long, value_enum, default_value_t = SearchArg::Pairs)]
-        search: SearchArg,
     },
     /// Learn the FC (200), HOG (100) and silhouette (100) codebooks by k-means over the local
     /// histograms of every frame of the datasets (their masks; a frame without one, as in a recording
@@ -90,25 +74,8 @@ enum Command {
         suit: PathBuf,
         #[arg(long, required = true)]
         data: Vec<PathBuf>,
-        /// Candidate basis functions S (k-means centres over the training descriptors).
-        #[arg(long, default_value_t = 1500)]
-        basis: usize,
-        /// fc+hog (default, with the silhouette box: 304 values), fc, hog, or silhouette.
-        #[arg(long, default_value = "fc+hog")]
-        descriptor: String,
-        /// Kernel width; default: chosen on held-back motions (every fifth clip, all its renderings) among ¼, ½, 1 and 2 × the median distance.
-        #[arg(long)]
-        width: Option<f32>,
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Masks the regressor's training descriptors are computed with: `segmenter` (default: the
-        /// suit's own segmenter run over each dataset as a stream, i.e. the masks it will see at run
-        /// time, head, hands and leaks included) or `truth` (the datasets' masks).
-        #[arg(long, value_enum, default_value_t = TrainingMasks::Segmenter)]
-        masks: TrainingMasks,
-        /// How the segmenter's term weights are searched for, when it is trained (as for `segment`).
-        #[arg(long, value_enum, default_value_t = SearchArg::Pairs)]
-        search: SearchArg,
+        #[command(flatten)]
+        run: SuitRun,
     },
     /// Learn the joint limits (per rotation channel, the range the training motions cover plus a
     /// margin) from mocap-aligned datasets or BVH clips; writes SUIT/joint_limits.toml.
@@ -220,15 +187,28 @@ enum Command {
     },
 }
 
-/// Which frames `suitcap-train segment` learns from and how.
+/// Which frames `suitcap-train segment` learns from and how (its options but the suit, the data
+/// and the validation sequences).
+#[derive(clap::Args, Clone, Debug)]
 struct SegmentRun {
-    /// Consecutive frames used, from `start`.
+    /// Number of consecutive frames used.
+    #[arg(long, default_value_t = 20)]
     frames: usize,
+    /// First frame used.
+    #[arg(long, default_value_t = 0)]
     start: usize,
-    /// Of those, the last ones kept for the weights' search.
+    /// Of those, the last N are held back to choose the term weights.
+    #[arg(long, default_value_t = 6)]
     held_back: usize,
+    /// The cut runs on frames box-downscaled by this factor (taller frames at run time may be
+    /// cut at a larger one that keeps at least 1.5 times the rows of the grid trained on; see
+    /// `SegmenterTables::cut_factor`).
+    #[arg(long, default_value_t = 2)]
     downscale: u32,
-    search: WeightSearch,
+    /// How the term weights are searched for: `pairs` (default) also moves two weights at
+    /// once; `coordinate` one at a time only (as the shipped suit's were chosen).
+    #[arg(long, value_enum, default_value_t = SearchArg::Pairs)]
+    search: SearchArg,
 }
 
 fn segment(
@@ -244,6 +224,7 @@ fn segment(
         downscale,
         search,
     } = run;
+    let search = WeightSearch::from(search);
     let suit = SuitDefinition::load_dir(suit_dir)?;
     let dataset = Dataset::open(data)?;
     if start + frames > dataset.frame_count() {
@@ -852,29 +833,40 @@ impl TrainingData {
 }
 
 /// How `suitcap-train suit` trains (its options but the suit and the data).
-struct SuitRun<'a> {
-    /// Candidate basis functions S.
+#[derive(clap::Args, Clone, Debug)]
+struct SuitRun {
+    /// Candidate basis functions S (k-means centres over the training descriptors).
+    #[arg(long, default_value_t = 1500)]
     basis: usize,
-    descriptor: &'a str,
-    /// Kernel width; `None`: chosen on held-back motions.
+    /// fc+hog (default, with the silhouette box: 304 values), fc, hog, or silhouette.
+    #[arg(long, default_value = "fc+hog")]
+    descriptor: String,
+    /// Kernel width; default: chosen on held-back motions (every fifth clip, all its renderings) among ¼, ½, 1 and 2 × the median distance.
+    #[arg(long)]
     width: Option<f32>,
+    #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Masks the regressor's training descriptors are computed with: `segmenter` (default: the
+    /// suit's own segmenter run over each dataset as a stream, i.e. the masks it will see at run
+    /// time, head, hands and leaks included) or `truth` (the datasets' masks).
+    #[arg(long, value_enum, default_value_t = TrainingMasks::Segmenter)]
     masks: TrainingMasks,
-    /// The segmenter's weight search, if the segmenter is trained.
-    search: WeightSearch,
+    /// How the segmenter's term weights are searched for, when it is trained (as for `segment`).
+    #[arg(long, value_enum, default_value_t = SearchArg::Pairs)]
+    search: SearchArg,
 }
 
 fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
     use suitcap::pose::regressor::Regressor;
-    let &SuitRun {
+    let SuitRun {
         basis,
-        descriptor,
+        ref descriptor,
         width,
         seed,
         masks,
         search,
-    } = run;
+    } = *run;
     let started = std::time::Instant::now();
     let mut kind = DescriptorKind::parse(descriptor)
         .with_context(|| format!("--descriptor '{descriptor}'"))?;
@@ -1230,9 +1222,9 @@ fn evaluate(
                 per_frame.push(record);
                 continue;
             }
-            errors.add(&layout, dataset.motion.frame(index), &result.frame);
             let mut this_frame = JointErrors::new(names.clone());
             this_frame.add(&layout, dataset.motion.frame(index), &result.frame);
+            errors.merge(&this_frame);
             record.angles_deg = Some((this_frame.mean_euler(), this_frame.mean_geodesic()));
             for (filter, variant) in filters.iter_mut().zip(variants.iter_mut()) {
                 let mut filtered = result.frame.clone();
@@ -1260,12 +1252,6 @@ fn evaluate(
                 root_pixels.1 += a.pixel.distance(t.pixel) as f64;
                 record.root_px = Some(a.pixel.distance(t.pixel) as f64);
                 record.root_px_regressed = Some(b.pixel.distance(t.pixel) as f64);
-                if std::env::var_os("DBG_ROOT").is_some() {
-                    eprintln!(
-                        "DBG {index} corr {:?} reg {:?} truth {:?} before {:?} after {:?}",
-                        result.correction, result.registration, t.pixel, b.pixel, a.pixel
-                    );
-                }
                 root_pixels.2 += 1;
                 depth_ratios.push(a.depth / t.depth);
             }
@@ -1536,48 +1522,16 @@ fn main() -> ExitCode {
         Command::Segment {
             suit,
             data,
-            frames,
-            start,
-            held_back,
-            downscale,
+            run,
             validate,
-            search,
-        } => {
-            let run = SegmentRun {
-                frames: *frames,
-                start: *start,
-                held_back: *held_back,
-                downscale: *downscale,
-                search: (*search).into(),
-            };
-            segment(suit, data, &run, validate)
-        }
+        } => segment(suit, data, run, validate),
         Command::Codebooks {
             suit,
             data,
             max_vectors,
             seed,
         } => codebooks(suit, data, *max_vectors, *seed),
-        Command::Suit {
-            suit,
-            data,
-            basis,
-            descriptor,
-            width,
-            seed,
-            masks,
-            search,
-        } => {
-            let run = SuitRun {
-                basis: *basis,
-                descriptor,
-                width: *width,
-                seed: *seed,
-                masks: *masks,
-                search: (*search).into(),
-            };
-            train_suit(suit, data, &run)
-        }
+        Command::Suit { suit, data, run } => train_suit(suit, data, run),
         Command::Experiments {
             suit,
             train,
