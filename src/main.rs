@@ -497,8 +497,8 @@ fn segment(
     let mut times = Vec::new();
     // Per frame scored against the truth: how the mask agrees with it, and the frame's name.
     let mut scored: Vec<(suitcap::mask::Agreement, String)> = Vec::new();
-    let (mut cleaned_frames, mut removed_px, mut filled_px, mut empty_frames) =
-        (0usize, 0usize, 0usize, 0usize);
+    let (mut cleaned_frames, mut removed_px, mut filled_px, mut off_cloth_px, mut empty_frames) =
+        (0usize, 0usize, 0usize, 0usize, 0usize);
     // The last frame's height, for the cut's factor in the summary.
     let mut last_height = None;
     loop {
@@ -523,10 +523,12 @@ fn segment(
         let result = segmenter.segment(&frame.image);
         last_height = Some(frame.image.height());
         times.push(result.times);
-        if result.cleanup.components_removed + result.cleanup.holes_filled > 0 {
+        let c = result.cleanup;
+        if c.components_removed + c.holes_filled + c.off_cloth_pieces > 0 {
             cleaned_frames += 1;
         }
         removed_px += result.cleanup.pixels_removed;
+        off_cloth_px += result.cleanup.off_cloth_pixels;
         filled_px += result.cleanup.pixels_filled;
         empty_frames += result.mask.is_empty() as usize;
         let path = out.join(&name);
@@ -555,8 +557,9 @@ fn segment(
         None => "the cut's resolution".to_owned(),
     };
     println!(
-        "clean-up (largest marker-carrying region kept, small holes filled) changed {cleaned_frames} frames: \
-         {removed_px} stray person pixels removed, {filled_px} hole pixels filled (on {grid})"
+        "clean-up (largest marker-carrying region kept, small holes filled, pieces not cloth and larger than a \
+         few markers removed) changed {cleaned_frames} frames: {removed_px} stray person pixels removed, \
+         {filled_px} hole pixels filled, {off_cloth_px} pixels of large pieces not cloth removed (on {grid})"
     );
     if !times.is_empty() {
         let stage_median =

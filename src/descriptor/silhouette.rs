@@ -22,6 +22,7 @@
 //!   ignored. This makes the descriptor scale invariant.
 
 use crate::mask::Mask;
+use crate::segment::cleanup::neighbours4;
 use glam::Vec2;
 use std::f32::consts::PI;
 
@@ -143,14 +144,7 @@ fn largest_component(mask: &Mask) -> Option<Component> {
         let mut size = 0;
         while let Some(i) = stack.pop() {
             size += 1;
-            let (x, y) = (i % w, i / w);
-            let neighbours = [
-                (x > 0).then(|| i - 1),
-                (x + 1 < w).then(|| i + 1),
-                (y > 0).then(|| i - w),
-                (y + 1 < h).then(|| i + w),
-            ];
-            for n in neighbours.into_iter().flatten() {
+            for n in neighbours4(i, w, h).into_iter().flatten() {
                 if px[n] && label[n] == 0 {
                     label[n] = next_id;
                     stack.push(n);

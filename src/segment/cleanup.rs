@@ -1,4 +1,5 @@
-//! Clean-up of the cut: keep the person's region, fill its small holes, attach head, hands and shoes.
+//! Clean-up of the cut: keep the person's region, fill its small holes, remove what cannot be suit,
+//! attach head, hands and shoes.
 //!
 //! The min-cut labels every pixel independently of any notion of "one person", so stray foreground
 //! (a suit-coloured object in the room) and small background holes (a shadowed fold) remain.
@@ -8,7 +9,8 @@
 //! in front cut off ([`RegionRule`]), and removes the rest; [`fill_holes`] fills background components
 //! that do not touch the image border and are smaller than a limit. Both report what they changed,
 //! which the segmenter passes on in its output. [`clean`] runs both on the box around the foreground
-//! only ([`PixelBox`]), with the same result as on the whole grid. [`attach_parts`] then grows the
+//! only ([`PixelBox`]), with the same result as on the whole grid. [`remove_large_off_cloth`] takes
+//! out the pieces of the region that are not cloth and too large for a marker. [`attach_parts`] then grows the
 //! suit into a band around it ([`part_band`]) through pixels of a part's colour, in pieces shaped like
 //! a head, a hand or a shoe ([`PartLimits`]). The person mask goes to the refinement at full
 //! resolution.
@@ -22,6 +24,9 @@ pub struct CleanupReport {
     pub pixels_removed: usize,
     pub holes_filled: usize,
     pub pixels_filled: usize,
+    /// Pieces of the cut too large for a marker that are not cloth ([`remove_large_off_cloth`]).
+    pub off_cloth_pieces: usize,
+    pub off_cloth_pixels: usize,
 }
 
 /// 4-connected components of pixels equal to `value`; returns the component id of every pixel
@@ -318,6 +323,71 @@ pub const PART_REACH: f32 = 0.15;
 /// [`PART_REACH`] ([`attach_parts_narrowing`]).
 pub const ATTACH_REACH: f32 = 0.2;
 
+/// The 4-neighbours of pixel `i` of a `width` × `height` grid (`None` beyond its edges).
+#[inline]
+pub fn neighbours4(i: usize, width: usize, height: usize) -> [Option<usize>; 4] {
+    let (x, y) = (i % width, i / width);
+    [
+        (x > 0).then(|| i - 1),
+        (x + 1 < width).then(|| i + 1),
+        (y > 0).then(|| i - width),
+        (y + 1 < height).then(|| i + width),
+    ]
+}
+
+/// Unlabels every 4-connected piece of `region ∧ off_cloth` larger than `max_area` pixels and
+/// returns how many pieces and pixels that removed. On the suit everything that is not cloth is a marker, and
+/// markers are 4 cm squares with 3 cm of cloth between them, so a larger piece of the person's
+/// region that is not cloth is background the cut took in (an orange, a tabby cat, skin-coloured
+/// wood between the legs; the head, hands and shoes are attached afterwards).
+#[allow(clippy::too_many_arguments)] // the grid, the rule and three reused buffers
+pub fn remove_large_off_cloth(
+    region: &mut [bool],
+    width: usize,
+    height: usize,
+    off_cloth: impl Fn(usize) -> bool,
+    max_area: usize,
+    stack: &mut Vec<usize>,
+    piece: &mut Vec<usize>,
+    seen: &mut Vec<bool>,
+) -> (usize, usize) {
+    let Some(b) = PixelBox::around(region, width, height, 0) else {
+        return (0, 0);
+    };
+    seen.clear();
+    seen.resize(width * height, false);
+    let (mut pieces, mut removed) = (0, 0);
+    for y in b.y0..b.y1 {
+        for x in b.x0..b.x1 {
+            let start = y * width + x;
+            if seen[start] || !region[start] || !off_cloth(start) {
+                continue;
+            }
+            seen[start] = true;
+            stack.clear();
+            piece.clear();
+            stack.push(start);
+            while let Some(i) = stack.pop() {
+                piece.push(i);
+                for j in neighbours4(i, width, height).into_iter().flatten() {
+                    if !seen[j] && region[j] && off_cloth(j) {
+                        seen[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+            if piece.len() > max_area {
+                pieces += 1;
+                removed += piece.len();
+                for &i in piece.iter() {
+                    region[i] = false;
+                }
+            }
+        }
+    }
+    (pieces, removed)
+}
+
 /// Rows spanned by the set pixels of `region` (row-major, `width` wide); 0 when none is set.
 pub fn region_height(region: &[bool], width: usize) -> usize {
     let first = region.iter().position(|&p| p);
@@ -612,6 +682,63 @@ mod tests {
             w,
             rows.len(),
         )
+    }
+
+    #[test]
+    fn off_cloth_pieces_larger_than_the_limit_are_removed() {
+        // 6×4, all person; off cloth: a 2×2 block (4 px, a marker) and an L of 5 px (not one).
+        #[rustfmt::skip]
+        let off = [
+            1, 1, 0, 0, 0, 0,
+            1, 1, 0, 1, 0, 0,
+            0, 0, 0, 1, 0, 0,
+            0, 0, 0, 1, 1, 1,
+        ];
+        let mut region = vec![true; 24];
+        region[17] = false; // not the person: stays out
+        let (mut stack, mut piece, mut seen) = (Vec::new(), Vec::new(), Vec::new());
+        let found = remove_large_off_cloth(
+            &mut region,
+            6,
+            4,
+            |i| off[i] == 1,
+            4,
+            &mut stack,
+            &mut piece,
+            &mut seen,
+        );
+        assert_eq!(found, (1, 5));
+        let removed: Vec<usize> = (0..24).filter(|&i| !region[i]).collect();
+        assert_eq!(removed, [9, 15, 17, 21, 22, 23]);
+        // At a limit of 3 the marker goes too; an empty region changes nothing.
+        let mut region = vec![true; 24];
+        assert_eq!(
+            remove_large_off_cloth(
+                &mut region,
+                6,
+                4,
+                |i| off[i] == 1,
+                3,
+                &mut stack,
+                &mut piece,
+                &mut seen
+            ),
+            (2, 9)
+        );
+        let mut empty = vec![false; 24];
+        assert_eq!(
+            remove_large_off_cloth(
+                &mut empty,
+                6,
+                4,
+                |_| true,
+                0,
+                &mut stack,
+                &mut piece,
+                &mut seen
+            ),
+            (0, 0)
+        );
     }
 
     #[test]

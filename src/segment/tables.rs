@@ -11,7 +11,8 @@
 //! 2. neighbourhood N: p(contrast bin | label pair) for BG→BG, BG→FG, FG→BG, FG→FG, counted over the
 //!    eight neighbours of the 3×3 neighbourhood (the cut itself uses the four axial ones);
 //! 3. gradient G: p(horizontal, vertical gradient bin | label);
-//! 4. motion M: p(gradient magnitude bin, temporal difference bin | label at t, label at t−1), which lets
+//! 4. motion M: p(gradient magnitude bin, temporal difference bin | label at t, label at t−1), the
+//!    difference counting a change of chroma as well as of brightness, which lets
 //!    labels change where the image changes at an edge and not inside smooth regions;
 //! 5. temporal T: the second-order Markov prior p(label_t | label_t−1, label_t−2);
 //!
@@ -29,8 +30,10 @@ use crate::model::{ModelError, ModelFile};
 
 pub const SEGMENTER_KIND: &str = "segmenter";
 /// Version of the segmenter model file; bump when the features or tables change.
-/// 7: the rows of the grid the tables were counted on (`trained_rows`).
-pub const SEGMENTER_VERSION: u32 = 7;
+/// 7: the rows of the grid the tables were counted on (`trained_rows`); 8: the motion term's
+/// temporal difference counts a change of chroma at the same brightness
+/// (`features::temporal_difference`).
+pub const SEGMENTER_VERSION: u32 = 8;
 /// Model file name inside a suit directory.
 pub const SEGMENTER_FILE: &str = "segmenter.bin";
 
@@ -274,7 +277,7 @@ impl TableCounts {
         }
         if let Some((prev, prev_mask)) = previous {
             for i in 0..w * h {
-                let dt = features.colour[i].val.abs_diff(prev.colour[i].val) as u32;
+                let dt = super::features::temporal_difference(features.colour[i], prev.colour[i]);
                 let bin = features.gradient_magnitude[i] as usize * TEMPORAL_BINS
                     + super::features::temporal_bin(dt);
                 self.motion[2 * mask[i] as usize + prev_mask[i] as usize][bin] += 1.0;

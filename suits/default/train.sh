@@ -8,12 +8,12 @@
 #    motions fell with each, by less each time (docs/measurements.md, fourth and fifth sessions of
 #    2026-12-04);
 # 2. suitcap-train suit: segmenter tables (20 frames of the first dataset; the term weights chosen
-#    by the coordinate search, `--search coordinate`: the pair search, the default since the fourth
-#    session of 2026-12-05, picks other weights here that segment the six pose test sequences no
-#    better, 0.9113 against 0.9107 mean IoU, so the shipped models were not retrained), codebooks,
-#    RVM regressor (its training descriptors computed with the new segmenter's masks, as at run
-#    time; the kernel width chosen on every fifth clip held back, all its renderings), written into
-#    suits/default/;
+#    by the pair search on its last 6 and on 60 frames each of three other datasets with other
+#    people, rooms and motions, `--validate`: on its 6 held-back frames alone the search picks
+#    weights that do worse in other rooms; docs/measurements.md, fifth session of 2026-12-05),
+#    codebooks, RVM regressor (its training descriptors computed with the new segmenter's masks, as
+#    at run time; the kernel width chosen on every fifth clip held back, all its renderings),
+#    written into suits/default/;
 # 3. suitcap-train limits: joint limits (joint_limits.toml) from the same clips.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -33,6 +33,8 @@ for ((pass = 0; pass < renderings; pass++)); do
   done
 done
 rm -f suits/default/segmenter.bin suits/default/codebook_*.bin
-./target/release/suitcap-train suit --suit suits/default "${data[@]}" --basis 1500 --search coordinate
+./target/release/suitcap-train suit --suit suits/default "${data[@]}" --basis 1500 \
+  --validate "$work/cmu_02_04_jump_balance" --validate "$work/cmu_07_01_walk" \
+  --validate "$work/cmu_05_02_dance_arms_pirouette"
 ./target/release/suitcap-train limits --suit suits/default --data suits/default/mocap/*.bvh
 echo "datasets kept in $work"

@@ -206,7 +206,7 @@ struct SegmentRun {
     #[arg(long, default_value_t = 2)]
     downscale: u32,
     /// How the term weights are searched for: `pairs` (default) also moves two weights at
-    /// once; `coordinate` one at a time only (as the shipped suit's were chosen).
+    /// once; `coordinate` one at a time only (faster, and often a worse optimum).
     #[arg(long, value_enum, default_value_t = SearchArg::Pairs)]
     search: SearchArg,
 }
@@ -854,6 +854,11 @@ struct SuitRun {
     /// How the segmenter's term weights are searched for, when it is trained (as for `segment`).
     #[arg(long, value_enum, default_value_t = SearchArg::Pairs)]
     search: SearchArg,
+    /// When the segmenter is trained: another dataset (another room, person, light) scored in the
+    /// weights' search too, as `segment --validate` (repeatable). Without one the weights are
+    /// chosen on the 6 held-back frames of the training sequence alone.
+    #[arg(long)]
+    validate: Vec<PathBuf>,
 }
 
 fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Result<()> {
@@ -866,6 +871,7 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         seed,
         masks,
         search,
+        ref validate,
     } = *run;
     let started = std::time::Instant::now();
     let mut kind = DescriptorKind::parse(descriptor)
@@ -909,7 +915,7 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
             downscale: 2,
             search,
         };
-        segment(suit_dir, dir, &run, &[])?;
+        segment(suit_dir, dir, &run, validate)?;
     } else {
         println!("stage 1/3: segmenter present");
     }
