@@ -10,10 +10,10 @@
 //! that do not touch the image border and are smaller than a limit. Both report what they changed,
 //! which the segmenter passes on in its output. [`clean`] runs both on the box around the foreground
 //! only ([`PixelBox`]), with the same result as on the whole grid. [`remove_large_off_cloth`] takes
-//! out the pieces of the region that are not cloth and too large for a marker. [`attach_parts`] then grows the
-//! suit into a band around it ([`part_band`]) through pixels of a part's colour, in pieces shaped like
-//! a head, a hand or a shoe ([`PartLimits`]). The person mask goes to the refinement at full
-//! resolution.
+//! out the pieces of the region that are not cloth and too large for a marker. [`attach_parts`]
+//! then grows the suit into a band around it ([`part_band`]) through pixels of a part's colour, in
+//! pieces shaped like a head, a hand or a shoe ([`PartLimits`]). The person mask goes to the
+//! refinement at full resolution.
 
 use crate::mask::bounding_box_of;
 
@@ -336,10 +336,10 @@ pub fn neighbours4(i: usize, width: usize, height: usize) -> [Option<usize>; 4] 
 }
 
 /// Unlabels every 4-connected piece of `region ∧ off_cloth` larger than `max_area` pixels and
-/// returns how many pieces and pixels that removed. On the suit everything that is not cloth is a marker, and
-/// markers are 4 cm squares with 3 cm of cloth between them, so a larger piece of the person's
-/// region that is not cloth is background the cut took in (an orange, a tabby cat, skin-coloured
-/// wood between the legs; the head, hands and shoes are attached afterwards).
+/// returns how many pieces and pixels that removed. On the suit everything that is not cloth is a
+/// marker, and markers are 4 cm squares with 3 cm of cloth between them, so a larger piece of the
+/// person's region that is not cloth is background the cut took in (an orange, a tabby cat,
+/// skin-coloured wood between the legs; the head, hands and shoes are attached afterwards).
 #[allow(clippy::too_many_arguments)] // the grid, the rule and three reused buffers
 pub fn remove_large_off_cloth(
     region: &mut [bool],

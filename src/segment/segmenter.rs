@@ -21,9 +21,9 @@
 //!    small holes ([`cleanup`](super::cleanup)); removes the pieces that are not the suit's cloth
 //!    and larger than a few of its markers (on the suit everything that is not cloth is a 4 cm
 //!    marker with cloth around it, so such a piece is an orange, fur or skin-coloured background
-//!    that the smoothness pulled in, often between the legs: [`SegmenterOptions::off_cloth_max_markers`]),
-//!    and reports what that changed; then attaches the
-//!    head, hands and shoes: pixels of a band around the suit ([`SegmenterOptions::part_reach`])
+//!    that the smoothness pulled in, often between the legs:
+//!    [`SegmenterOptions::off_cloth_max_markers`]), and reports what that changed; then attaches
+//!    the head, hands and shoes: pixels of a band around the suit ([`SegmenterOptions::part_reach`])
 //!    connected to it whose colour is likelier under the learned part table than under the (online)
 //!    background, in pieces shaped like a head, a hand or a shoe ([`SegmenterOptions::part_max_share`],
 //!    [`SegmenterOptions::part_max_top_share`], [`SegmenterOptions::part_max_round_share`],
