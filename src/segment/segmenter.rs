@@ -107,10 +107,10 @@ pub struct SegmenterOptions {
     pub part_min_depth: f32,
     /// The largest piece of the cut that is not the suit's cloth (markers, or anything else
     /// chromatic), in marker areas (the suit's marker size on a person of [`PERSON_HEIGHT_CM`]
-    /// as tall as the cut region); larger pieces are background
-    /// ([`remove_large_off_cloth`](super::cleanup::remove_large_off_cloth); 0: kept). Chosen on
-    /// the three validation sequences of `scripts/eval_segmenter.sh` (mean IoU with the tables
-    /// and weights trained without it: off 0.9338, 4 markers 0.9379, 8 0.9371, 16 0.9358).
+    /// as tall as the cut region); larger pieces are background ([`remove_large_off_cloth`]; 0:
+    /// kept). Chosen on the three validation sequences of `scripts/eval_segmenter.sh` (mean IoU
+    /// with the tables and weights trained without it: off 0.9338, 4 markers 0.9379, 8 0.9371,
+    /// 16 0.9358).
     pub off_cloth_max_markers: f32,
 }
 
