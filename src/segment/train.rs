@@ -28,12 +28,12 @@
 //! and the cut dropped a 16-pixel-wide shin over a tan box rather than pay for its outline.
 //! Scored on three other sequences too, the search picks weights under which the script's five
 //! test sequences gain 0.013–0.096 IoU (docs/measurements.md, second session of 2026-12-05).
-//! Which optimum wins still depends on the sequences scored, and `suitcap-train suit` passes none:
-//! on the default suit's data its held-back frames alone already pick σ_C 4, σ_N 4 (the coordinate
-//! search, which `suits/default/train.sh` keeps; the pair search picks σ_C 4, σ_N 8, and both
-//! segment the pose test sequences alike, 0.9107 and 0.9113 mean IoU), and three of its other clips
-//! as validation picked weights 0.004 IoU worse on the pose test sequences (0.0011 better with the
-//! pair search).
+//! Which optimum wins still depends on the sequences scored. `suitcap-train suit` passes the
+//! `--validate` datasets it is given; `suits/default/train.sh` gives three of its own datasets
+//! with other people, rooms and motions, and the pair search then picks σ_C 2, σ_N 1, σ_G ¼,
+//! σ_M 1, σ_T 1 for the default suit: better than the weights picked before on nine fresh
+//! renderings in other rooms (0.9375 against 0.9336 mean IoU), worse on the six pose test
+//! sequences, where they lose heads (docs/measurements.md, fifth session of 2026-12-05).
 
 use image::RgbImage;
 
