@@ -53,7 +53,8 @@ fn main() -> anyhow::Result<()> {
     let fps = motion.frame_rate();
     let mut cloth = None;
     for k in 0..=last.min(motion.frame_count() - 1) {
-        let c = stage.advance(motion.frame(k), k as f64 / fps, true, &empty, &dummy)?;
+        let silhouette = suitcap::body_size::Silhouette::whole(&empty);
+        let c = stage.advance(motion.frame(k), k as f64 / fps, true, silhouette, &dummy)?;
         if let Some(q) = &c.quality {
             if q.strain_max > 0.10 || q.penetration_cm > 0.2 {
                 println!(

@@ -2,7 +2,9 @@
 # Reproduces the README's body-size figures: `suitcap run --live-cloth` with the shipped default suit on
 # the first 12 frames of each sequence in WORK_DIR (the datasets `scripts/eval_pose.sh WORK_DIR`
 # renders; the run measures the person's size on the first 10 and cuts the garment for it), the
-# estimated height against the generator's subject, and the mean absolute error.
+# estimated height against the rendered figure's standing height (the subject's nominal height
+# changed by its limb ratios, which `suitcap run` prints from the dataset's manifest and motion),
+# and the mean absolute error, against the standing and against the nominal height.
 #   scripts/eval_bodysize.sh WORK_DIR
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,17 +21,24 @@ for dataset in "$work"/*/; do
   for frame in $(ls "$dataset/frames" | head -12); do
     ln -s "$(realpath "$dataset/frames/$frame")" "$runs/$name/frames/$frame"
   done
-  # The generator's subject: its name and nominal height from the manifest's [subject] table.
-  subject=$(sed -n '/^\[subject\]/,/^\[/p' "$dataset/manifest.toml")
-  who=$(echo "$subject" | sed -n 's/^name = "\(.*\)"/\1/p')
-  true_cm=$(echo "$subject" | sed -n 's/^height_cm = //p')
-  line=$(target/release/suitcap run "$runs/$name/frames" --camera "$dataset/camera.toml" \
-    --suit suits/default --out "$runs/$name/out" --live-cloth 2>&1 | grep 'body size measured') ||
+  # The dataset's manifest and motion beside the frames: `suitcap run` then prints the truth.
+  ln -s "$(realpath "$dataset/manifest.toml")" "$runs/$name/manifest.toml"
+  ln -s "$(realpath "$dataset/motion.bvh")" "$runs/$name/motion.bvh"
+  output=$(target/release/suitcap run "$runs/$name/frames" --camera "$dataset/camera.toml" \
+    --suit suits/default --out "$runs/$name/out" --live-cloth 2>&1)
+  line=$(echo "$output" | grep 'body size measured') ||
     { echo "eval_bodysize: $name: no body size measured" >&2; exit 1; }
+  truth=$(echo "$output" | grep 'ground truth (generator') ||
+    { echo "eval_bodysize: $name: no ground truth printed" >&2; exit 1; }
   cm=$(echo "$line" | sed -n 's/.*: \([0-9.]*\) cm tall.*/\1/p')
   girth=$(echo "$line" | sed -n 's/.*girth \([0-9.]*\).*/\1/p')
-  echo "$name $who $true_cm $cm $girth"
-done | awk '{ err = ($4 - $3) / $3 * 100; sum += (err < 0 ? -err : err); n++
-  printf "%-45s %-7s %5.0f cm, estimated %5.0f cm (%+.1f %%), girth %s\n", $1, $2, $3, $4, err, $5 }
-  END { if (n) printf "mean absolute height error over %d sequences: %.1f %%\n", n, sum / n }'
+  who=$(echo "$truth" | sed -n 's/.*subject \([^,]*\),.*/\1/p')
+  nominal=$(echo "$truth" | sed -n 's/.*nominal height \([0-9.]*\) cm.*/\1/p')
+  standing=$(echo "$truth" | sed -n 's/.*standing \([0-9.]*\) cm.*/\1/p')
+  true_girth=$(echo "$truth" | sed -n 's/.*girth \([0-9.]*\)$/\1/p')
+  echo "$name $who $standing $nominal $cm $girth $true_girth"
+done | awk '{ err = ($5 - $3) / $3 * 100; nom = ($5 - $4) / $4 * 100
+  sum += (err < 0 ? -err : err); sum_nom += (nom < 0 ? -nom : nom); n++
+  printf "%-45s %-7s standing %5.1f cm (nominal %3.0f), estimated %5.0f cm (%+.1f %%; %+.1f %% of nominal), girth %s (subject %s)\n", $1, $2, $3, $4, $5, err, nom, $6, $7 }
+  END { if (n) printf "mean absolute height error over %d sequences: %.1f %% of the standing height (%.1f %% of the nominal)\n", n, sum / n, sum_nom / n }'
 rm -rf "$runs"

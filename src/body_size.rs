@@ -8,8 +8,12 @@
 //! Per frame, with the template body's mask `M` and the person's silhouette `S`:
 //!
 //! * height scale `s = height(S) / height(M)` (bounding-box heights in pixels; both stand at the same
-//!   root and in the same pose, so the ratio is the body's scale);
-//! * girth `g = area(S) / (s² · area(M))` (widths scale with `s·g` and lengths with `s`).
+//!   root and in the same pose, so the ratio is the body's scale). Where the segmenter says where
+//!   the suit alone is ([`crate::segment::Segmentation::suit_box`]), the heights are those of the
+//!   suit's box and of the template's visible suit parts instead: from the wrists, neck or
+//!   shoulders to the ankles, which a head or hand the segmenter left off the mask does not shorten;
+//! * girth `g = area(S) / (s² · area(M))` (widths scale with `s·g` and lengths with `s`; with the
+//!   suit boxes, the areas of the rows within them).
 //!
 //! [`BodySizeEstimator`] keeps the per-frame ratios and reports their medians, which shrug off frames
 //! where the pose or the mask is wrong. The result becomes a [`Subject`] whose skeleton and capsules
@@ -17,9 +21,9 @@
 
 use glam::{Affine3A, Vec3};
 
-use crate::body::{Body, PartMesh, Subject, BASE_HEIGHT_CM};
+use crate::body::{Body, Material, PartMesh, Subject, BASE_HEIGHT_CM};
 use crate::camera::Camera;
-use crate::mask::Mask;
+use crate::mask::{bounding_box_of, Mask};
 use crate::raster::{draw_triangle, Cull, DepthBuffer, ScreenVertex};
 use crate::skeleton::Skeleton;
 use crate::stats::median;
@@ -86,39 +90,70 @@ pub fn skeleton_height_cm(skeleton: &Skeleton) -> f32 {
     }
 }
 
-/// The height scale and girth that turn `model` (the template body's mask) into `silhouette`, or
-/// `None` when either is empty or touches the image border (a cut-off person has no height).
-pub fn frame_ratios(silhouette: &Mask, model: &Mask) -> Option<(f32, f32)> {
+/// The person as the pose stage saw them: the whole silhouette, and where known the box of the
+/// suit alone (without the head, hands and shoes the segmenter attaches to it; (x0, y0, x1, y1)
+/// with x1, y1 exclusive, as [`Mask::bounding_box`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Silhouette<'a> {
+    pub mask: &'a Mask,
+    pub suit_box: Option<(u32, u32, u32, u32)>,
+}
+
+impl<'a> Silhouette<'a> {
+    /// A silhouette without a suit box (ground-truth masks, masks read from files).
+    pub fn whole(mask: &'a Mask) -> Silhouette<'a> {
+        Silhouette {
+            mask,
+            suit_box: None,
+        }
+    }
+}
+
+/// The template body as the camera sees it: its mask, and the box of its visible suit parts.
+#[derive(Clone, Debug)]
+pub struct ModelView {
+    pub mask: Mask,
+    pub suit_box: Option<(u32, u32, u32, u32)>,
+}
+
+/// The height scale and girth that turn `model` (the template body's view) into `silhouette`, or
+/// `None` when either is empty or touches the image border (a cut-off person has no height). When
+/// both suit boxes are known, the heights are theirs and the areas those of the masks' rows
+/// within them (the head above and the feet below left out of both); else the whole masks'.
+pub fn frame_ratios(silhouette: Silhouette, model: &ModelView) -> Option<(f32, f32)> {
     let touches_border = |m: &Mask, b: (u32, u32, u32, u32)| {
         b.0 == 0 || b.1 == 0 || b.2 >= m.width() || b.3 >= m.height()
     };
-    let s_box = silhouette.bounding_box()?;
-    let m_box = model.bounding_box()?;
-    if touches_border(silhouette, s_box) || touches_border(model, m_box) {
+    let s_box = silhouette.mask.bounding_box()?;
+    let m_box = model.mask.bounding_box()?;
+    if touches_border(silhouette.mask, s_box) || touches_border(&model.mask, m_box) {
         return None;
     }
-    let s_height = (s_box.3 - s_box.1) as f32;
-    let m_height = (m_box.3 - m_box.1) as f32;
+    let (s_box, m_box) = match (silhouette.suit_box, model.suit_box) {
+        (Some(s), Some(m)) => (s, m),
+        _ => (s_box, m_box),
+    };
+    let s_height = s_box.3.saturating_sub(s_box.1) as f32;
+    let m_height = m_box.3.saturating_sub(m_box.1) as f32;
     let scale = s_height / m_height;
-    let girth = silhouette.area() as f32 / (scale * scale * model.area() as f32);
-    (scale.is_finite() && girth.is_finite()).then_some((scale, girth))
+    let s_area = rows_area(silhouette.mask, s_box.1, s_box.3) as f32;
+    let m_area = rows_area(&model.mask, m_box.1, m_box.3) as f32;
+    let girth = s_area / (scale * scale * m_area);
+    (scale.is_finite() && scale > 0.0 && girth.is_finite()).then_some((scale, girth))
 }
 
-/// Rasterizes the capsules of `body` posed by `world` into a person mask as `camera` sees it.
-/// `depth` is scratch space, resized as needed.
-pub fn body_mask(
-    body: &Body,
-    world: &[Affine3A],
-    camera: &Camera,
-    depth: &mut DepthBuffer,
-) -> Mask {
-    BodyMasker::new(body).mask(world, camera, depth)
+/// The set pixels of `mask` in rows `y0..y1`.
+fn rows_area(mask: &Mask, y0: u32, y1: u32) -> usize {
+    let width = mask.width() as usize;
+    let end = (y1 as usize * width).min(mask.pixels().len());
+    let start = (y0 as usize * width).min(end);
+    mask.pixels()[start..end].iter().filter(|&&p| p).count()
 }
 
 /// A body's part meshes, built once, rasterized into person masks for any pose.
 #[derive(Clone, Debug)]
 pub struct BodyMasker {
-    parts: Vec<(usize, PartMesh)>,
+    parts: Vec<(usize, Material, PartMesh)>,
     projected: Vec<Option<ScreenVertex>>,
 }
 
@@ -130,7 +165,7 @@ impl BodyMasker {
             parts: body
                 .parts
                 .iter()
-                .map(|p| (p.joint, p.mesh(16, 4.0)))
+                .map(|p| (p.joint, p.material, p.mesh(16, 4.0)))
                 .collect(),
             projected: Vec::new(),
         }
@@ -138,12 +173,45 @@ impl BodyMasker {
 
     /// The mask of the body posed by `world` (joint transforms) as `camera` sees it.
     pub fn mask(&mut self, world: &[Affine3A], camera: &Camera, depth: &mut DepthBuffer) -> Mask {
+        let nearest = self.rasterize(world, camera, depth);
+        mask_of(camera, nearest.iter().map(|&c| c != NOTHING).collect())
+    }
+
+    /// The mask of the body posed by `world` as `camera` sees it, and the box of the pixels where
+    /// a suit part is the nearest surface.
+    pub fn view(
+        &mut self,
+        world: &[Affine3A],
+        camera: &Camera,
+        depth: &mut DepthBuffer,
+    ) -> ModelView {
+        let nearest = self.rasterize(world, camera, depth);
+        let suit: Vec<bool> = nearest.iter().map(|&c| c == SUIT).collect();
+        let suit_box = bounding_box_of(&suit, camera.intrinsics.width as usize)
+            .map(|(x0, y0, x1, y1)| (x0 as u32, y0 as u32, x1 as u32, y1 as u32));
+        let mask = mask_of(camera, nearest.iter().map(|&c| c != NOTHING).collect());
+        ModelView { mask, suit_box }
+    }
+
+    /// Per pixel of `camera`'s image, what is nearest: [`NOTHING`], [`SUIT`] or [`BARE`] (skin,
+    /// shoes).
+    fn rasterize(
+        &mut self,
+        world: &[Affine3A],
+        camera: &Camera,
+        depth: &mut DepthBuffer,
+    ) -> Vec<u8> {
         let (width, height) = (camera.intrinsics.width, camera.intrinsics.height);
         depth.clear(width, height);
-        let mut pixels = vec![false; width as usize * height as usize];
-        for (joint, mesh) in &self.parts {
+        let mut nearest = vec![NOTHING; width as usize * height as usize];
+        for (joint, material, mesh) in &self.parts {
             let Some(transform) = world.get(*joint) else {
                 continue;
+            };
+            let code = if *material == Material::Suit {
+                SUIT
+            } else {
+                BARE
             };
             self.projected.clear();
             self.projected.extend(mesh.vertices.iter().map(|v| {
@@ -156,12 +224,22 @@ impl BodyMasker {
                     continue;
                 };
                 draw_triangle(depth, [a, b, c], Cull::None, 1.0, |f| {
-                    pixels[f.index] = true
+                    nearest[f.index] = code
                 });
             }
         }
-        Mask::from_pixels(width, height, pixels).unwrap_or_else(|| Mask::empty(width, height))
+        nearest
     }
+}
+
+/// What [`BodyMasker`] found nearest at a pixel.
+const NOTHING: u8 = 0;
+const SUIT: u8 = 1;
+const BARE: u8 = 2;
+
+fn mask_of(camera: &Camera, pixels: Vec<bool>) -> Mask {
+    let (width, height) = (camera.intrinsics.width, camera.intrinsics.height);
+    Mask::from_pixels(width, height, pixels).unwrap_or_else(|| Mask::empty(width, height))
 }
 
 /// Collects per-frame size ratios and reports their medians.
@@ -185,7 +263,7 @@ impl BodySizeEstimator {
     /// call, its meshes are kept). Returns whether the frame counted.
     pub fn add_frame(
         &mut self,
-        silhouette: &Mask,
+        silhouette: Silhouette,
         body: &Body,
         skeleton: &Skeleton,
         frame: &[f32],
@@ -193,11 +271,11 @@ impl BodySizeEstimator {
     ) -> bool {
         let mut world = Vec::new();
         skeleton.forward_kinematics(frame, &mut world);
-        let depth = self
-            .depth
-            .get_or_insert_with(|| DepthBuffer::new(silhouette.width(), silhouette.height()));
+        let depth = self.depth.get_or_insert_with(|| {
+            DepthBuffer::new(silhouette.mask.width(), silhouette.mask.height())
+        });
         let masker = self.masker.get_or_insert_with(|| BodyMasker::new(body));
-        let model = masker.mask(&world, camera, depth);
+        let model = masker.view(&world, camera, depth);
         match frame_ratios(silhouette, &model) {
             Some((s, g)) => {
                 self.scales.push(s);
@@ -257,27 +335,64 @@ mod tests {
         m
     }
 
+    fn view(mask: Mask) -> ModelView {
+        ModelView {
+            mask,
+            suit_box: None,
+        }
+    }
+
     #[test]
     fn a_twice_as_tall_and_wide_silhouette_is_scale_two_girth_one() {
         // Model: 2 wide × 3 tall = 6 px. Silhouette: 4 × 6 = 24 px → s = 2, g = 24 / (4 · 6) = 1.
-        let model = rect(10, 10, 1, 1, 2, 3);
+        let model = view(rect(10, 10, 1, 1, 2, 3));
         let person = rect(10, 10, 1, 1, 4, 6);
-        let (s, g) = frame_ratios(&person, &model).expect("ratios");
+        let (s, g) = frame_ratios(Silhouette::whole(&person), &model).expect("ratios");
         assert_eq!((s, g), (2.0, 1.0));
         // Same height, twice as wide: girth 2.
         let wide = rect(10, 10, 1, 1, 4, 3);
-        assert_eq!(frame_ratios(&wide, &model), Some((1.0, 2.0)));
+        assert_eq!(
+            frame_ratios(Silhouette::whole(&wide), &model),
+            Some((1.0, 2.0))
+        );
+    }
+
+    #[test]
+    fn the_suit_boxes_give_the_height_when_both_are_known() {
+        // Model rows 1..=6 (6 tall, 2 wide), its suit rows 3..=6 (4 tall). The person's mask lost
+        // its head: rows 3..=6 only, the suit the same rows. By the whole masks the person is
+        // 4/6 the model's height; by the suit boxes the same height.
+        let model = ModelView {
+            mask: rect(10, 10, 1, 1, 2, 6),
+            suit_box: Some((1, 3, 3, 7)),
+        };
+        let headless = rect(10, 10, 1, 3, 2, 6);
+        let whole = frame_ratios(Silhouette::whole(&headless), &model).expect("ratios");
+        assert_eq!(whole.0, 4.0 / 6.0);
+        let with_suit = Silhouette {
+            mask: &headless,
+            suit_box: Some((1, 3, 3, 7)),
+        };
+        // Scale 1; girth from the rows of the suit boxes: 8 px against the model's 8 there.
+        assert_eq!(frame_ratios(with_suit, &model), Some((1.0, 1.0)));
+        // Without the model's suit box the whole masks count.
+        assert_eq!(
+            frame_ratios(with_suit, &view(model.mask.clone())),
+            Some(whole)
+        );
     }
 
     #[test]
     fn a_silhouette_cut_by_the_border_or_empty_does_not_count() {
-        let model = rect(10, 10, 1, 1, 2, 3);
-        assert_eq!(frame_ratios(&rect(10, 10, 0, 1, 2, 3), &model), None);
-        assert_eq!(frame_ratios(&rect(10, 10, 1, 1, 2, 9), &model), None);
-        assert_eq!(frame_ratios(&Mask::empty(10, 10), &model), None);
+        let model = view(rect(10, 10, 1, 1, 2, 3));
+        let ratios = |m: &Mask| frame_ratios(Silhouette::whole(m), &model);
+        assert_eq!(ratios(&rect(10, 10, 0, 1, 2, 3)), None);
+        assert_eq!(ratios(&rect(10, 10, 1, 1, 2, 9)), None);
+        assert_eq!(ratios(&Mask::empty(10, 10)), None);
     }
 
-    /// A known subject rendered with the body model is measured back at its own size.
+    /// A known subject rendered with the body model is measured back at its own size, from the
+    /// whole silhouette, and from the suit's box when the head is missing from the silhouette.
     #[test]
     fn a_rendered_subject_is_measured_at_its_size() {
         let clip =
@@ -298,17 +413,51 @@ mod tests {
             Vec3::new(0.0, 90.0, 0.0),
             Vec3::Y,
         );
-        let mut estimator = BodySizeEstimator::new();
+        let mut person = BodyMasker::new(&person_body);
+        let (mut whole, mut headless_whole, mut headless_suit) = (
+            BodySizeEstimator::new(),
+            BodySizeEstimator::new(),
+            BodySizeEstimator::new(),
+        );
         let mut depth = DepthBuffer::new(320, 240);
         for frame in motion.frames().step_by(20).take(6) {
             let mut world = Vec::new();
             scaled.forward_kinematics(frame, &mut world);
-            let silhouette = body_mask(&person_body, &world, &camera, &mut depth);
-            estimator.add_frame(&silhouette, &body, template, frame, &camera);
+            let seen = person.view(&world, &camera, &mut depth);
+            whole.add_frame(
+                Silhouette::whole(&seen.mask),
+                &body,
+                template,
+                frame,
+                &camera,
+            );
+            // The head left off: every row above the suit's top cleared.
+            let suit_box = seen.suit_box.expect("suit visible");
+            let mut headless = seen.mask.clone();
+            let cut = (suit_box.1 * headless.width()) as usize;
+            headless.pixels_mut()[..cut].fill(false);
+            headless_whole.add_frame(
+                Silhouette::whole(&headless),
+                &body,
+                template,
+                frame,
+                &camera,
+            );
+            let silhouette = Silhouette {
+                mask: &headless,
+                suit_box: Some(suit_box),
+            };
+            headless_suit.add_frame(silhouette, &body, template, frame, &camera);
         }
-        let size = estimator.estimate();
+        let size = whole.estimate();
         assert!(size.frames >= 4, "{size:?}");
         assert!((size.height_scale - 1.12).abs() < 0.05, "{size:?}");
         assert!((size.girth - 1.2).abs() < 0.12, "{size:?}");
+        let suit = headless_suit.estimate();
+        assert!((suit.height_scale - 1.12).abs() < 0.05, "{suit:?}");
+        assert!((suit.girth - 1.2).abs() < 0.12, "{suit:?}");
+        // The headless silhouette alone comes out well short.
+        let short = headless_whole.estimate();
+        assert!(short.height_scale < 1.12 - 0.1, "{short:?}");
     }
 }

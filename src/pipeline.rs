@@ -11,6 +11,7 @@ use std::time::Instant;
 
 use image::RgbImage;
 
+use crate::body_size::Silhouette;
 use crate::camera::Camera;
 use crate::descriptor::{Codebooks, Describer};
 use crate::mask::Mask;
@@ -46,6 +47,9 @@ pub struct PoseFrame {
     /// False when nobody was seen: `frame` is then the previous pose (or the template).
     pub person: bool,
     pub mask: Mask,
+    /// The box of the suit alone, from the segmenter ([`crate::segment::Segmentation::suit_box`];
+    /// `None` when a mask was given without it).
+    pub suit_box: Option<(u32, u32, u32, u32)>,
     /// The suit markers detected in the frame (empty when nobody was seen).
     pub markers: Vec<crate::descriptor::markers::DetectedMarker>,
     /// The regressed pose vector (empty when nobody was seen).
@@ -143,13 +147,22 @@ impl PosePipeline {
         self.last = None;
     }
 
-    /// Estimates the pose in one frame seen by `camera`; `mask` replaces the segmenter when given.
-    pub fn process(&mut self, image: &RgbImage, camera: &Camera, mask: Option<&Mask>) -> PoseFrame {
+    /// Estimates the pose in one frame seen by `camera`; `given` (a mask, and the suit's box when
+    /// a segmenter elsewhere made it) replaces the segmenter.
+    pub fn process(
+        &mut self,
+        image: &RgbImage,
+        camera: &Camera,
+        given: Option<Silhouette>,
+    ) -> PoseFrame {
         let mut times = PoseTimes::default();
         let started = Instant::now();
-        let mask = match mask {
-            Some(m) => m.clone(),
-            None => self.segmenter.segment(image).mask,
+        let (mask, suit_box) = match given {
+            Some(given) => (given.mask.clone(), given.suit_box),
+            None => {
+                let segmentation = self.segmenter.segment(image);
+                (segmentation.mask, segmentation.suit_box)
+            }
         };
         times.segment = ms(started);
         let started = Instant::now();
@@ -168,6 +181,7 @@ impl PosePipeline {
                 frame,
                 person: false,
                 mask,
+                suit_box,
                 markers: Vec::new(),
                 pose: Vec::new(),
                 root_before_correction,
@@ -244,6 +258,7 @@ impl PosePipeline {
             frame,
             person: true,
             mask,
+            suit_box,
             markers,
             pose: self.pose.clone(),
             root_before_correction,

@@ -241,10 +241,11 @@ fn rechecksum(bytes: &mut [u8]) {
 }
 
 /// A small valid regressor file for the default suit: 2 relevance vectors over the HOG descriptor
-/// (code 1), weights for the 105 pose values.
+/// (code 1), the matrix rotation encoding (code 1), weights for the 105 pose values.
 fn small_regressor() -> Vec<u8> {
     let mut m = ModelFile::new(REGRESSOR_KIND, REGRESSOR_VERSION);
     m.push("descriptor", &[1], vec![1.0]);
+    m.push("rotations", &[1], vec![1.0]);
     m.push("width", &[1], vec![3.0]);
     m.push("noise", &[1], vec![0.1]);
     m.push(
@@ -337,9 +338,38 @@ fn decode_any(bytes: &[u8]) {
 #[test]
 fn model_fixtures_are_valid() {
     let d = ModelDir::new();
-    Regressor::load(d.path(), &d.suit).expect("small regressor");
+    let regressor = Regressor::load(d.path(), &d.suit).expect("small regressor");
+    assert_eq!(
+        regressor.layout.rotations,
+        suitcap::pose::RotationEncoding::MatrixColumns
+    );
     Codebooks::load(d.path()).expect("codebooks");
     SegmenterTables::load(d.path()).expect("segmenter");
+}
+
+#[test]
+fn an_unknown_rotation_encoding_is_an_error_naming_the_file() {
+    let d = ModelDir::new();
+    let mut m = ModelFile::decode(
+        &small_regressor(),
+        Path::new("r.bin"),
+        REGRESSOR_KIND,
+        REGRESSOR_VERSION,
+    )
+    .expect("fixture");
+    for array in &mut m.arrays {
+        if array.name == "rotations" {
+            array.data = vec![7.0];
+        }
+    }
+    std::fs::write(d.path().join(REGRESSOR_FILE), m.encode()).expect("write");
+    let error = Regressor::load(d.path(), &d.suit)
+        .expect_err("code 7")
+        .to_string();
+    assert!(
+        error.contains(REGRESSOR_FILE) && error.contains("rotation encoding"),
+        "{error}"
+    );
 }
 
 #[test]
@@ -393,6 +423,7 @@ fn array_edit() -> impl Strategy<Value = ArrayEdit> {
     );
     let names = prop::sample::select(vec![
         "descriptor",
+        "rotations",
         "width",
         "noise",
         "relevance_vectors",

@@ -206,7 +206,10 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
             &result.frame,
             k as f64 / 30.0,
             result.person,
-            &result.mask,
+            suitcap::body_size::Silhouette {
+                mask: &result.mask,
+                suit_box: result.suit_box,
+            },
             &camera,
         )?;
         vertices = vertices.max(c.positions.len());

@@ -476,6 +476,13 @@ pub fn run(
             size.height_scale,
             size.girth
         );
+        if let Some(truth) = Path::new(input)
+            .is_dir()
+            .then(|| generator_truth(Path::new(input), None))
+            .flatten()
+        {
+            println!("  {truth}");
+        }
     }
     if garment_failures.frames > 0 {
         eprintln!(
@@ -583,6 +590,32 @@ pub fn demo(suit_dir: &Path, out: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The generator's subject, when `frames_dir` is the `frames/` of a generated dataset (its
+/// `manifest.toml` beside it): the nominal height, the standing height of the rendered figure
+/// with its limb ratios (from the dataset's `motion.bvh`, or `motion` when given) and the girth,
+/// which body-size measurements are checked against.
+fn generator_truth(frames_dir: &Path, motion: Option<&Motion>) -> Option<String> {
+    let dataset = frames_dir.parent()?;
+    let subject = suitcap::dataset::Manifest::load(&dataset.join("manifest.toml"))
+        .ok()?
+        .subject?;
+    let loaded;
+    let motion = match motion {
+        Some(motion) => motion,
+        None => {
+            loaded = Motion::load(&dataset.join("motion.bvh")).ok()?;
+            &loaded
+        }
+    };
+    Some(format!(
+        "ground truth (generator's subject {}, nominal height {:.1} cm): standing {:.1} cm with its limb ratios (the motion's own skeleton, scale 1.000), girth {:.2}",
+        subject.name,
+        subject.height_cm,
+        suitcap::body_size::skeleton_height_cm(&motion.skeleton),
+        subject.girth
+    ))
+}
+
 /// `suitcap drape`: a garment simulated on a given motion, composited into the given frames.
 #[allow(clippy::too_many_arguments)]
 pub fn drape(
@@ -593,7 +626,7 @@ pub fn drape(
     out: &Path,
     garment: &GarmentArgs,
 ) -> anyhow::Result<()> {
-    use suitcap::body_size::{BodySize, BodySizeEstimator};
+    use suitcap::body_size::{BodySize, BodySizeEstimator, Silhouette};
     use suitcap::mask::Mask;
     let motion = Motion::load(motion_path)?;
     let camera = Camera::load(camera_path)?;
@@ -620,7 +653,7 @@ pub fn drape(
                     continue;
                 };
                 estimator.add_frame(
-                    &Mask::from_gray(&grey),
+                    Silhouette::whole(&Mask::from_gray(&grey)),
                     &body,
                     &template,
                     motion.frame(k),
@@ -643,20 +676,8 @@ pub fn drape(
             BodySize::TEMPLATE
         }
     };
-    if let Some(truth) = frames_dir
-        .parent()
-        .map(|d| d.join("manifest.toml"))
-        .filter(|p| p.is_file())
-        .and_then(|p| suitcap::dataset::Manifest::load(&p).ok())
-        .and_then(|manifest| manifest.subject)
-    {
-        println!(
-            "  ground truth (generator's subject {}, nominal height {:.1} cm): the motion's own skeleton (scale 1.000, standing {:.1} cm with its limb ratios), girth {:.2}",
-            truth.name,
-            truth.height_cm,
-            suitcap::body_size::skeleton_height_cm(&template),
-            truth.girth
-        );
+    if let Some(truth) = generator_truth(frames_dir, Some(&motion)) {
+        println!("  {truth}");
     }
     if garment.garment.eq_ignore_ascii_case("none") {
         bail!("--garment none: drape needs a garment");
@@ -692,7 +713,8 @@ pub fn drape(
                 continue;
             }
         };
-        let cloth = stage.advance(motion.frame(k), k as f64 / fps, true, &empty, &camera)?;
+        let silhouette = suitcap::body_size::Silhouette::whole(&empty);
+        let cloth = stage.advance(motion.frame(k), k as f64 / fps, true, silhouette, &camera)?;
         vertices = cloth.positions.len();
         if let Some(q) = cloth.quality {
             quality.push((k, q));

@@ -10,6 +10,9 @@
 //! it back into the world with the camera's extrinsics and puts the root where the offset and depth
 //! say, through the intrinsics. Decoding rescales each (sin, cos) pair to unit length before `atan2`.
 //! The joints the suit does not estimate keep the values of a template frame.
+//!
+//! A regressor may instead be trained on the first two columns of each joint's rotation matrix
+//! ([`RotationEncoding::MatrixColumns`], also six values per joint): see there for why.
 
 pub mod chart;
 pub mod correction;
@@ -66,6 +69,109 @@ pub fn decompose(channels: [Channel; 3], r: Mat3) -> [f32; 3] {
     [alpha.to_degrees(), beta.to_degrees(), gamma.to_degrees()]
 }
 
+/// How a joint's rotation is written into its six values of the pose vector.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum RotationEncoding {
+    /// The paper's: sine and cosine of each of the three BVH angles, in the file's channel order.
+    #[default]
+    EulerSinCos,
+    /// The first two columns of the rotation matrix (Zhou et al. 2019, "On the continuity of
+    /// rotation representations in neural networks"), made orthonormal again by Gram–Schmidt when
+    /// decoded, then taken apart into the joint's BVH angles. Near gimbal lock (a shoulder whose
+    /// arm is raised past the horizontal: the middle angle of Z-X-Y near ±90°), rotations a few
+    /// degrees apart have Euler triples tens of degrees apart, and a regressor that averages the
+    /// sines and cosines of its training poses averages unrelated angles there; the matrix
+    /// entries change as little as the rotation does.
+    MatrixColumns,
+}
+
+impl RotationEncoding {
+    pub const ALL: [RotationEncoding; 2] = [
+        RotationEncoding::EulerSinCos,
+        RotationEncoding::MatrixColumns,
+    ];
+
+    /// The name on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            RotationEncoding::EulerSinCos => "euler",
+            RotationEncoding::MatrixColumns => "matrix",
+        }
+    }
+
+    /// The code stored in the regressor's model file.
+    pub fn code(self) -> f32 {
+        match self {
+            RotationEncoding::EulerSinCos => 0.0,
+            RotationEncoding::MatrixColumns => 1.0,
+        }
+    }
+
+    pub fn from_code(code: f32) -> Option<RotationEncoding> {
+        Self::ALL.into_iter().find(|e| e.code() == code)
+    }
+
+    /// The six values of the rotation whose BVH angles are `degrees` (channel order `order`).
+    fn encode(self, order: [Channel; 3], degrees: [f32; 3], out: &mut Vec<f32>) {
+        match self {
+            RotationEncoding::EulerSinCos => {
+                for a in degrees {
+                    let (s, c) = a.to_radians().sin_cos();
+                    out.push(s);
+                    out.push(c);
+                }
+            }
+            RotationEncoding::MatrixColumns => {
+                let r = compose(order, degrees);
+                out.extend_from_slice(&r.x_axis.to_array());
+                out.extend_from_slice(&r.y_axis.to_array());
+            }
+        }
+    }
+
+    /// The BVH angles (channel order `order`) of six values; any six finite values give finite
+    /// angles (a zero pair or column decodes as no rotation). Of a rotation matrix's two Euler
+    /// triples, the one with the middle angle in [−90°, 90°] ([`decompose`]): the convention the
+    /// shipped CMU clips are written in (a knee bent past a right angle is about (−175°, 80°,
+    /// 175°) there, the same rotation as (0°, 100°, 0°)). Choosing the triple nearer a template
+    /// frame's or the smaller one instead put the thighs and shins 2.5–6.5° further from the truth
+    /// (docs/measurements.md, sixth session of 2026-12-05).
+    fn decode(self, order: [Channel; 3], values: &[f32]) -> [f32; 3] {
+        match self {
+            RotationEncoding::EulerSinCos => {
+                let mut angles = [0.0f32; 3];
+                for (k, a) in angles.iter_mut().enumerate() {
+                    let (s, c) = (values[2 * k], values[2 * k + 1]);
+                    let norm = (s * s + c * c).sqrt();
+                    *a = if norm > 1e-9 {
+                        (s / norm).atan2(c / norm).to_degrees()
+                    } else {
+                        0.0
+                    };
+                }
+                angles
+            }
+            RotationEncoding::MatrixColumns => {
+                let r = orthonormal(
+                    Vec3::from_slice(&values[..3]),
+                    Vec3::from_slice(&values[3..6]),
+                );
+                decompose(order, r)
+            }
+        }
+    }
+}
+
+/// The rotation whose first column points along `a` and whose second lies in the plane of `a`
+/// and `b` (Gram–Schmidt); the identity's columns stand in for a zero or parallel input.
+fn orthonormal(a: Vec3, b: Vec3) -> Mat3 {
+    let x = a.try_normalize().unwrap_or(Vec3::X);
+    let y = (b - x * x.dot(b))
+        .try_normalize()
+        .unwrap_or_else(|| x.any_orthonormal_vector());
+    Mat3::from_cols(x, y, x.cross(y))
+}
+
 /// Where each estimated joint's values live in a BVH frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PoseLayout {
@@ -75,6 +181,8 @@ pub struct PoseLayout {
     pub orders: Vec<[Channel; 3]>,
     /// Frame indices of the root's X, Y, Z position channels.
     pub root_position: [usize; 3],
+    /// How each joint's rotation is written.
+    pub rotations: RotationEncoding,
 }
 
 /// A skeleton the pose vector cannot describe.
@@ -145,7 +253,13 @@ impl PoseLayout {
             joints,
             orders,
             root_position,
+            rotations: RotationEncoding::default(),
         })
+    }
+
+    /// The same layout with another rotation encoding.
+    pub fn with_rotations(self, rotations: RotationEncoding) -> PoseLayout {
+        PoseLayout { rotations, ..self }
     }
 
     pub fn len(&self) -> usize {
@@ -172,11 +286,7 @@ impl PoseLayout {
                 let world = compose(*order, angles);
                 angles = decompose(*order, camera.rotation * world);
             }
-            for a in angles {
-                let (s, c) = a.to_radians().sin_cos();
-                out.push(s);
-                out.push(c);
-            }
+            self.rotations.encode(*order, angles, &mut out);
         }
         let root = root_world(skeleton, frame, self.root_position);
         let (centre, height) = box_centre_height(bbox);
@@ -194,6 +304,16 @@ impl PoseLayout {
         out
     }
 
+    /// Each estimated joint's three BVH angles (degrees, channel order) as the pose vector holds
+    /// them, the root's relative to the camera: what the held-back error of training compares.
+    pub fn joint_angles(&self, pose: &[f32]) -> Vec<[f32; 3]> {
+        self.orders
+            .iter()
+            .enumerate()
+            .map(|(n, order)| self.rotations.decode(*order, &pose[6 * n..6 * n + 6]))
+            .collect()
+    }
+
     /// A BVH frame from a pose vector: the estimated joints from the vector, everything else from
     /// `template` (same layout), the root rotation and position through `camera` and the box.
     pub fn decode(
@@ -206,16 +326,7 @@ impl PoseLayout {
     ) -> Vec<f32> {
         let mut frame = template.to_vec();
         for (n, ((_, channels), order)) in self.joints.iter().zip(&self.orders).enumerate() {
-            let mut angles = [0.0f32; 3];
-            for (k, a) in angles.iter_mut().enumerate() {
-                let (s, c) = (pose[6 * n + 2 * k], pose[6 * n + 2 * k + 1]);
-                let norm = (s * s + c * c).sqrt();
-                *a = if norm > 1e-9 {
-                    (s / norm).atan2(c / norm).to_degrees()
-                } else {
-                    0.0
-                };
-            }
+            let mut angles = self.rotations.decode(*order, &pose[6 * n..6 * n + 6]);
             if n == 0 {
                 let in_camera = compose(*order, angles);
                 angles = decompose(*order, camera.rotation.transpose() * in_camera);
@@ -300,17 +411,27 @@ mod tests {
     #[test]
     fn encode_then_decode_gives_back_the_frame() {
         let (motion, layout, camera) = fixture();
+        for rotations in RotationEncoding::ALL {
+            round_trip(&motion, &layout.clone().with_rotations(rotations), &camera);
+        }
+    }
+
+    fn round_trip(motion: &crate::bvh::Motion, layout: &PoseLayout, camera: &Camera) {
         let bbox = (250.0, 100.0, 390.0, 420.0);
         let template = motion.frame(0).to_vec();
         for f in [20, 60, 120] {
             let frame = motion.frame(f);
-            let pose = layout.encode(&motion.skeleton, frame, &camera, bbox);
+            let pose = layout.encode(&motion.skeleton, frame, camera, bbox);
             assert_eq!(pose.len(), 105);
-            let back = layout.decode(&motion.skeleton, &pose, &template, &camera, bbox);
+            let back = layout.decode(&motion.skeleton, &pose, &template, camera, bbox);
             for ((_, channels), order) in layout.joints.iter().zip(&layout.orders) {
                 let a = compose(*order, channels.map(|c| frame[c]));
                 let b = compose(*order, channels.map(|c| back[c]));
-                assert!(close(a, b), "frame {f}: rotations differ");
+                assert!(
+                    close(a, b),
+                    "{:?}, frame {f}: rotations differ",
+                    layout.rotations
+                );
             }
             for &c in &layout.root_position {
                 assert!(
@@ -323,7 +444,83 @@ mod tests {
         }
     }
 
+    #[test]
+    fn a_knee_bent_past_a_right_angle_decodes_as_the_clips_write_it() {
+        // Z-X-Y (0°, 100°, 0°) is written (180°, 80°, 180°) by the CMU conversion, with the middle
+        // angle within ±90°; decoded from its matrix columns it comes back so.
+        let order = ORDERS[0];
+        let mut values = Vec::new();
+        RotationEncoding::MatrixColumns.encode(order, [0.0, 100.0, 0.0], &mut values);
+        let back = RotationEncoding::MatrixColumns.decode(order, &values);
+        assert!((back[1] - 80.0).abs() < 0.01, "{back:?}");
+        assert!((back[0].abs() - 180.0).abs() < 0.01 && (back[2].abs() - 180.0).abs() < 0.01);
+    }
+
+    #[test]
+    fn matrix_columns_of_a_quarter_turn_about_z() {
+        // R_z(90°) takes x to y and y to −x: its first two columns are (0, 1, 0) and (−1, 0, 0).
+        let order = ORDERS[0];
+        let mut out = Vec::new();
+        RotationEncoding::MatrixColumns.encode(order, [90.0, 0.0, 0.0], &mut out);
+        let expected = [0.0, 1.0, 0.0, -1.0, 0.0, 0.0];
+        assert!(
+            out.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-6),
+            "{out:?}"
+        );
+        // Scaled and skewed columns decode to the same rotation.
+        let skewed = [0.0, 3.0, 0.0, -2.0, 0.5, 0.0];
+        let angles = RotationEncoding::MatrixColumns.decode(order, &skewed);
+        assert!(
+            close(compose(order, angles), compose(order, [90.0, 0.0, 0.0])),
+            "{angles:?}"
+        );
+    }
+
+    #[test]
+    fn near_gimbal_lock_close_rotations_have_close_matrix_columns() {
+        // Z-X-Y: (10°, 89°, 20°) and, just past the pole, (12°, 92°, 17°), whose angles in the
+        // middle angle's range are (−168°, 88°, −163°): rotations about 3° apart whose first and
+        // last angles differ by about 180°.
+        let order = ORDERS[0];
+        let a = [10.0, 89.0, 20.0];
+        let b = decompose(order, compose(order, [12.0, 92.0, 17.0]));
+        assert!(
+            (b[0] + 168.0).abs() < 0.01 && (b[1] - 88.0).abs() < 0.01,
+            "{b:?}"
+        );
+        let relative = compose(order, a).transpose() * compose(order, b);
+        let trace = relative.x_axis.x + relative.y_axis.y + relative.z_axis.z;
+        let degrees = ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees();
+        assert!(degrees < 5.0, "{degrees}");
+        let gap = |encoding: RotationEncoding| {
+            let (mut ea, mut eb) = (Vec::new(), Vec::new());
+            encoding.encode(order, a, &mut ea);
+            encoding.encode(order, b, &mut eb);
+            ea.iter()
+                .zip(&eb)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0f32, f32::max)
+        };
+        assert!(gap(RotationEncoding::MatrixColumns) < 0.1);
+        assert!(gap(RotationEncoding::EulerSinCos) > 1.5);
+    }
+
     proptest! {
+        #[test]
+        fn any_six_values_decode_to_a_rotation(values in proptest::collection::vec(-2.0f32..2.0, 105)) {
+            let (motion, layout, camera) = fixture();
+            let layout = layout.with_rotations(RotationEncoding::MatrixColumns);
+            let bbox = (250.0, 100.0, 390.0, 420.0);
+            let back = layout.decode(&motion.skeleton, &values, motion.frame(0), &camera, bbox);
+            prop_assert!(back.iter().all(|v| v.is_finite()));
+            let again = layout.encode(&motion.skeleton, &back, &camera, bbox);
+            for columns in again[..102].chunks(6) {
+                let (x, y) = (Vec3::from_slice(&columns[..3]), Vec3::from_slice(&columns[3..]));
+                prop_assert!((x.length() - 1.0).abs() < 1e-4 && (y.length() - 1.0).abs() < 1e-4);
+                prop_assert!(x.dot(y).abs() < 1e-4);
+            }
+        }
+
         #[test]
         fn decoded_angles_come_from_unit_sin_cos_pairs(values in proptest::collection::vec(-2.0f32..2.0, 105)) {
             let (motion, layout, camera) = fixture();

@@ -2,14 +2,14 @@
 //! writes.
 //!
 //! Stored in the suit directory as `regressor.bin` (the relevance vectors, the weight matrix, the kernel
-//! width, the noise estimate and the descriptor kind) and `skeleton.bvh` (the training mocap's
+//! width, the noise estimate, the descriptor kind and the pose vector's rotation encoding) and `skeleton.bvh` (the training mocap's
 //! hierarchy with one template frame whose values fill the joints the suit does not estimate). The
 //! runtime loads both, predicts a pose vector per frame and decodes it into a BVH frame.
 
 use std::path::{Path, PathBuf};
 
 use super::rvm::Rvm;
-use super::{LayoutError, PoseLayout};
+use super::{LayoutError, PoseLayout, RotationEncoding};
 use crate::bvh::{BvhError, Motion};
 use crate::descriptor::DescriptorKind;
 use crate::model::{ModelError, ModelFile};
@@ -17,8 +17,9 @@ use crate::suit::SuitDefinition;
 
 pub const REGRESSOR_KIND: &str = "regressor";
 /// Version 2: the pose vector's depth is in metres (`pose::DEPTH_SCALE`). Version 3: the full
-/// descriptor's box values are weighted by [`crate::descriptor::BOX_WEIGHT`].
-pub const REGRESSOR_VERSION: u32 = 3;
+/// descriptor's box values are weighted by [`crate::descriptor::BOX_WEIGHT`]. Version 4: the
+/// rotation encoding of the pose vector is stored ([`RotationEncoding`]).
+pub const REGRESSOR_VERSION: u32 = 4;
 pub const REGRESSOR_FILE: &str = "regressor.bin";
 pub const SKELETON_FILE: &str = "skeleton.bvh";
 
@@ -67,6 +68,7 @@ impl Regressor {
         let r = &self.rvm;
         let mut m = ModelFile::new(REGRESSOR_KIND, REGRESSOR_VERSION);
         m.push("descriptor", &[1], vec![kind_code(self.descriptor)]);
+        m.push("rotations", &[1], vec![self.layout.rotations.code()]);
         m.push("width", &[1], vec![r.width]);
         m.push("noise", &[1], vec![r.noise]);
         m.push(
@@ -112,6 +114,12 @@ impl Regressor {
                     message: "unknown descriptor kind".into(),
                 }
             })?;
+        let rotations = RotationEncoding::from_code(m.array(&path, "rotations", &[1])?[0])
+            .ok_or_else(|| RegressorError::Mismatch {
+                path: path.clone(),
+                message: "unknown rotation encoding".into(),
+            })?;
+        let layout = layout.with_rotations(rotations);
         let width = m.array(&path, "width", &[1])?[0];
         let noise = m.array(&path, "noise", &[1])?[0];
         let rv = get("relevance_vectors")?;

@@ -52,7 +52,7 @@ use super::features::{
 use super::maxflow::{GridGraph, GridMaxFlow};
 use super::snap::snap_to_colour_edges;
 use super::tables::SegmenterTables;
-use crate::mask::Mask;
+use crate::mask::{bounding_box_of, Mask};
 use crate::suit::SuitDefinition;
 
 /// Tuning of the clean-up and the boundary refinement.
@@ -176,6 +176,11 @@ impl StageTimes {
 #[derive(Clone, Debug)]
 pub struct Segmentation {
     pub mask: Mask,
+    /// The box of the suit alone in frame pixels ((x0, y0, x1, y1), x1 and y1 exclusive): the cut
+    /// after its clean-up, before the head, hands and shoes are attached; `None` with nobody in
+    /// the frame. The body-size measurement takes the person's height from it, which a head left
+    /// off the mask does not shorten.
+    pub suit_box: Option<(u32, u32, u32, u32)>,
     pub cleanup: CleanupReport,
     /// The max-flow (= minimum energy) of the cut.
     pub flow: f64,
@@ -609,6 +614,16 @@ impl Segmenter {
                 &mut self.seen,
             );
         }
+        let suit_box = bounding_box_of(&labels, w).map(|(x0, y0, x1, y1)| {
+            let to_frame = |v: usize, limit: u32| ((v * factor as usize) as u32).min(limit);
+            let (fw, fh) = (frame.width(), frame.height());
+            (
+                to_frame(x0, fw),
+                to_frame(y0, fh),
+                to_frame(x1, fw),
+                to_frame(y1, fh),
+            )
+        });
         // The parts outside the suit: band pixels whose colour is likelier a part than background.
         let mut person = labels.clone();
         part_bands(
@@ -677,6 +692,7 @@ impl Segmenter {
         times.history = ms(started);
         Segmentation {
             mask,
+            suit_box,
             cleanup: report,
             flow: result.flow,
             times,

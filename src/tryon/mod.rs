@@ -24,7 +24,7 @@ use glam::{Affine3A, Vec2, Vec3};
 use image::RgbImage;
 
 use crate::body::Body;
-use crate::body_size::{BodySize, BodySizeEstimator};
+use crate::body_size::{BodySize, BodySizeEstimator, Silhouette};
 use crate::camera::Camera;
 use crate::cloth::garment::{GarmentError, GarmentKind, GarmentMesh, GarmentParams};
 use crate::cloth::material::Material;
@@ -246,7 +246,7 @@ impl ClothStage {
         frame: &[f32],
         time_s: f64,
         person: bool,
-        silhouette: &Mask,
+        silhouette: Silhouette,
         camera: &Camera,
     ) -> Result<ClothFrame, TryOnError> {
         let started = Instant::now();

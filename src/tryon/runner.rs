@@ -20,6 +20,7 @@ use std::time::Instant;
 
 use image::RgbImage;
 
+use crate::body_size::Silhouette;
 use crate::camera::Camera;
 use crate::mask::Mask;
 use crate::pipeline::{PoseFrame, PosePipeline};
@@ -136,11 +137,11 @@ impl PoseStage {
     fn process(
         &mut self,
         image: &RgbImage,
-        mask: Option<&Mask>,
+        given: Option<Silhouette>,
         camera: &Camera,
         time_s: f64,
     ) -> PoseFrame {
-        let mut pose = self.pipeline.process(image, camera, mask);
+        let mut pose = self.pipeline.process(image, camera, given);
         if let Some(filter) = &mut self.filter {
             if pose.person {
                 filter.apply(time_s, &mut pose.frame);
@@ -169,6 +170,8 @@ struct Captured {
 struct Segmented {
     captured: Captured,
     mask: Option<Mask>,
+    /// The suit's box of the segmentation ([`crate::segment::Segmentation::suit_box`]).
+    suit_box: Option<(u32, u32, u32, u32)>,
     segment_ms: f64,
 }
 
@@ -226,11 +229,12 @@ pub fn run(
             scope.spawn(move || {
                 while let Some(captured) = input.pop() {
                     let started = Instant::now();
-                    let mask = segmenter.as_mut().map(|s| s.segment(&captured.image).mask);
+                    let segmentation = segmenter.as_mut().map(|s| s.segment(&captured.image));
                     let segment_ms = started.elapsed().as_secs_f64() * 1e3;
                     let item = Segmented {
                         captured,
-                        mask,
+                        suit_box: segmentation.as_ref().and_then(|s| s.suit_box),
+                        mask: segmentation.map(|s| s.mask),
                         segment_ms,
                     };
                     if output.push(item).is_err() {
@@ -247,12 +251,13 @@ pub fn run(
                 while let Some(Segmented {
                     captured,
                     mask,
+                    suit_box,
                     segment_ms,
                 }) = input.pop()
                 {
                     let time = captured.timestamp_s;
-                    let mut pose =
-                        pose_stage.process(&captured.image, mask.as_ref(), &camera, time);
+                    let given = mask.as_ref().map(|mask| Silhouette { mask, suit_box });
+                    let mut pose = pose_stage.process(&captured.image, given, &camera, time);
                     if mask.is_some() {
                         pose.times.segment = segment_ms;
                     }
@@ -276,7 +281,11 @@ pub fn run(
                                 stage.set_garment(garment);
                             }
                             let time = posed.captured.timestamp_s;
-                            match stage.advance(&p.frame, time, p.person, &p.mask, &camera) {
+                            let silhouette = Silhouette {
+                                mask: &p.mask,
+                                suit_box: p.suit_box,
+                            };
+                            match stage.advance(&p.frame, time, p.person, silhouette, &camera) {
                                 Ok(cloth) => (cloth, None),
                                 Err(e) => (
                                     ClothFrame::hidden(ClothStatus::Off, 0.0),

@@ -12,8 +12,11 @@
 #    people, rooms and motions, `--validate`: on its 6 held-back frames alone the search picks
 #    weights that do worse in other rooms; docs/measurements.md, fifth session of 2026-12-05),
 #    codebooks, RVM regressor (its training descriptors computed with the new segmenter's masks, as
-#    at run time; the kernel width chosen on every fifth clip held back, all its renderings),
-#    written into suits/default/;
+#    at run time; the kernel width chosen on every fifth clip held back, all its renderings; each
+#    joint's rotation as the first two columns of its matrix, `--rotations matrix`, which on the
+#    held-back clips erred 0.27-0.35 degrees less than the paper's sines and cosines of the Euler
+#    angles at every kernel width: docs/measurements.md, sixth session of 2026-12-05), written into
+#    suits/default/;
 # 3. suitcap-train limits: joint limits (joint_limits.toml) from the same clips.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -34,7 +37,7 @@ for ((pass = 0; pass < renderings; pass++)); do
 done
 rm -f suits/default/segmenter.bin suits/default/codebook_*.bin
 ./target/release/suitcap-train suit --suit suits/default "${data[@]}" --basis 1500 \
-  --validate "$work/cmu_02_04_jump_balance" --validate "$work/cmu_07_01_walk" \
+  --rotations matrix --validate "$work/cmu_02_04_jump_balance" --validate "$work/cmu_07_01_walk" \
   --validate "$work/cmu_05_02_dance_arms_pirouette"
 ./target/release/suitcap-train limits --suit suits/default --data suits/default/mocap/*.bvh
 echo "datasets kept in $work"

@@ -15,6 +15,7 @@ use clap::{Parser, Subcommand};
 
 use suitcap::dataset::Dataset;
 use suitcap::mask::Mask;
+use suitcap::pose::{PoseLayout, RotationEncoding};
 use suitcap::segment::{
     train_segmenter, SearchStep, TrainingFrame, WeightSearch, MAX_VALIDATION_FRAMES,
     MIN_VALIDATION_FRAMES,
@@ -100,16 +101,10 @@ enum Command {
         train: Vec<PathBuf>,
         #[arg(long, required = true)]
         data: Vec<PathBuf>,
-        #[arg(long, value_delimiter = ',', default_value = "512,768,1024,1500")]
-        basis: Vec<usize>,
         #[arg(long)]
         out: PathBuf,
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Masks the regressors' training descriptors are computed with, as for `suit`:
-        /// `segmenter` (default, as the shipped suit is trained) or `truth`.
-        #[arg(long, value_enum, default_value_t = TrainingMasks::Segmenter)]
-        masks: TrainingMasks,
+        #[command(flatten)]
+        run: ExperimentsRun,
     },
     /// How well training motions cover test motions: for each frame of each --data motion, the
     /// paper's error measure (the suit's joints but the root) to the closest pose of any --train
@@ -539,14 +534,15 @@ fn training_set(
     codebooks: &suitcap::descriptor::Codebooks,
     kinds: &[suitcap::descriptor::DescriptorKind],
     segmenter: Option<&suitcap::segment::SegmenterTables>,
+    rotations: RotationEncoding,
 ) -> anyhow::Result<(Vec<Vec<f32>>, Vec<f32>, usize)> {
     use rayon::prelude::*;
     use suitcap::descriptor::{quantise, Describer};
-    use suitcap::pose::PoseLayout;
     /// One frame's descriptors (one per kind) and its pose vector.
     type DescribedFrame = (Vec<Vec<f32>>, Vec<f32>);
     let layout = PoseLayout::new(&suit.skeleton, &dataset.motion.skeleton)
-        .with_context(|| format!("{}: motion.bvh", dataset.root.display()))?;
+        .with_context(|| format!("{}: motion.bvh", dataset.root.display()))?
+        .with_rotations(rotations);
     let segmented: Option<Vec<Mask>> = match segmenter {
         Some(tables) => Some(segmenter_masks(
             dataset,
@@ -646,20 +642,40 @@ impl TrainingMasks {
     }
 }
 
+/// How the pose vector writes each joint's rotation (`--rotations`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum RotationsArg {
+    /// The paper's sine and cosine of each BVH angle.
+    Euler,
+    /// The first two columns of the rotation matrix (continuous through gimbal lock).
+    Matrix,
+}
+
+impl From<RotationsArg> for RotationEncoding {
+    fn from(arg: RotationsArg) -> RotationEncoding {
+        match arg {
+            RotationsArg::Euler => RotationEncoding::EulerSinCos,
+            RotationsArg::Matrix => RotationEncoding::MatrixColumns,
+        }
+    }
+}
+
 /// Mean absolute angle error (degrees) of predictions for `x` against pose vectors `y`, over every
-/// (sin, cos) pair (the root offset and depth are left out).
-fn pose_vector_error(rvm: &suitcap::pose::rvm::Rvm, x: &[f32], y: &[f32], outputs: usize) -> f64 {
-    let dim = rvm.dim;
+/// joint's three decoded angles (the root offset and depth are left out).
+fn pose_vector_error(
+    rvm: &suitcap::pose::rvm::Rvm,
+    layout: &PoseLayout,
+    x: &[f32],
+    y: &[f32],
+) -> f64 {
+    let (dim, outputs) = (rvm.dim, layout.len());
     let (mut total, mut count) = (0.0f64, 0usize);
     let mut out = vec![0.0f32; outputs];
     for (xi, yi) in x.chunks_exact(dim).zip(y.chunks_exact(outputs)) {
         rvm.predict_into(xi, &mut out);
-        for (a, b) in out[..outputs - 3]
-            .chunks(2)
-            .zip(yi[..outputs - 3].chunks(2))
-        {
-            let (pa, pb) = (a[0].atan2(a[1]), b[0].atan2(b[1]));
-            total += suitcap::pose::eval::wrap_degrees((pa - pb).to_degrees()).abs() as f64;
+        let (predicted, truth) = (layout.joint_angles(&out), layout.joint_angles(yi));
+        for (a, b) in predicted.iter().flatten().zip(truth.iter().flatten()) {
+            total += suitcap::pose::eval::wrap_degrees(a - b).abs() as f64;
             count += 1;
         }
     }
@@ -706,6 +722,8 @@ struct TrainingData {
     held_y: Vec<f32>,
     dim: usize,
     outputs: usize,
+    /// The pose vectors' layout (the first dataset's skeleton and the chosen rotation encoding).
+    layout: PoseLayout,
 }
 
 impl TrainingData {
@@ -717,7 +735,18 @@ impl TrainingData {
         data: &[PathBuf],
         kinds: &[suitcap::descriptor::DescriptorKind],
         segmenter: Option<&suitcap::segment::SegmenterTables>,
+        rotations: RotationEncoding,
     ) -> anyhow::Result<Vec<TrainingData>> {
+        let datasets = data
+            .iter()
+            .map(|dir| Dataset::open(dir))
+            .collect::<Result<Vec<_>, _>>()?;
+        let Some(first) = datasets.first() else {
+            bail!("no training datasets");
+        };
+        let layout = PoseLayout::new(&suit.skeleton, &first.motion.skeleton)
+            .with_context(|| format!("{}: motion.bvh", first.root.display()))?
+            .with_rotations(rotations);
         let mut sets: Vec<TrainingData> = kinds
             .iter()
             .map(|kind| TrainingData {
@@ -727,19 +756,16 @@ impl TrainingData {
                 held_y: Vec::new(),
                 dim: kind.len(),
                 outputs: 0,
+                layout: layout.clone(),
             })
             .collect();
-        let datasets = data
-            .iter()
-            .map(|dir| Dataset::open(dir))
-            .collect::<Result<Vec<_>, _>>()?;
         let names: Vec<&str> = datasets
             .iter()
             .map(|d| d.manifest.clip.name.as_str())
             .collect();
         let (clip_of, clips) = clip_indices(&names);
         for (dataset, &clip) in datasets.iter().zip(&clip_of) {
-            let (x, y, n) = training_set(dataset, suit, codebooks, kinds, segmenter)?;
+            let (x, y, n) = training_set(dataset, suit, codebooks, kinds, segmenter, rotations)?;
             if n == 0 {
                 continue;
             }
@@ -819,7 +845,7 @@ impl TrainingData {
                 seed,
             };
             let (rvm, report) = Rvm::train(&self.x, n, self.dim, &self.y, self.outputs, &options)?;
-            let error = pose_vector_error(&rvm, &self.held_x, &self.held_y, self.outputs);
+            let error = pose_vector_error(&rvm, &self.layout, &self.held_x, &self.held_y);
             println!(
                 "  width {w:.4} ({factor} × median): {} relevance vectors, held-back angle error {error:.2}°",
                 report.relevance_vectors
@@ -830,6 +856,23 @@ impl TrainingData {
         }
         Ok(best.1)
     }
+}
+
+/// How `suitcap-train experiments` trains its regressors (its options but the suit, the data and
+/// the output directory).
+#[derive(clap::Args, Clone, Debug)]
+struct ExperimentsRun {
+    #[arg(long, value_delimiter = ',', default_value = "512,768,1024,1500")]
+    basis: Vec<usize>,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Masks the regressors' training descriptors are computed with, as for `suit`:
+    /// `segmenter` (default, as the shipped suit is trained) or `truth`.
+    #[arg(long, value_enum, default_value_t = TrainingMasks::Segmenter)]
+    masks: TrainingMasks,
+    /// How the pose vector writes each joint's rotation, as for `suit`.
+    #[arg(long, value_enum, default_value_t = RotationsArg::Euler)]
+    rotations: RotationsArg,
 }
 
 /// How `suitcap-train suit` trains (its options but the suit and the data).
@@ -859,6 +902,11 @@ struct SuitRun {
     /// chosen on the 6 held-back frames of the training sequence alone.
     #[arg(long)]
     validate: Vec<PathBuf>,
+    /// How the pose vector writes each joint's rotation: `euler` (the paper's sine and cosine of
+    /// each BVH angle) or `matrix` (the first two columns of the rotation matrix, continuous where
+    /// a raised arm's Euler angles jump).
+    #[arg(long, value_enum, default_value_t = RotationsArg::Euler)]
+    rotations: RotationsArg,
 }
 
 fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Result<()> {
@@ -872,7 +920,9 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         masks,
         search,
         ref validate,
+        rotations,
     } = *run;
+    let rotations = RotationEncoding::from(rotations);
     let started = std::time::Instant::now();
     let mut kind = DescriptorKind::parse(descriptor)
         .with_context(|| format!("--descriptor '{descriptor}'"))?;
@@ -939,7 +989,8 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         }
     );
     let tables = masks.segmenter_tables(suit_dir)?;
-    let set = TrainingData::collect(&suit, &codebooks, data, &[kind], tables.as_ref())?.remove(0);
+    let set = TrainingData::collect(&suit, &codebooks, data, &[kind], tables.as_ref(), rotations)?
+        .remove(0);
     let total = set.frames();
     let width = match width {
         Some(w) => w,
@@ -952,7 +1003,7 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         first_dataset.motion.frame_time,
         first_dataset.motion.frame(0).to_vec(),
     )?;
-    let layout = suitcap::pose::PoseLayout::new(&suit.skeleton, &template.skeleton)?;
+    let layout = PoseLayout::new(&suit.skeleton, &template.skeleton)?.with_rotations(rotations);
     let regressor = Regressor {
         rvm,
         descriptor: kind,
@@ -965,9 +1016,10 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         .with_context(|| format!("cannot create {}", scratch.display()))?;
     regressor.save(&scratch)?;
     let manifest = format!(
-        "# suitcap suit model, written by suitcap-train {}\nformat = 1\ndescriptor = \"{}\"\nbasis_candidates = {}\nrelevance_vectors = {}\nkernel_width = {}\nnoise = {}\ntraining_frames = {}\ndatasets = [{}]\n",
+        "# suitcap suit model, written by suitcap-train {}\nformat = 1\ndescriptor = \"{}\"\nrotations = \"{}\"\nbasis_candidates = {}\nrelevance_vectors = {}\nkernel_width = {}\nnoise = {}\ntraining_frames = {}\ndatasets = [{}]\n",
         env!("CARGO_PKG_VERSION"),
         kind.name(),
+        rotations.name(),
         report.candidates,
         report.relevance_vectors,
         width,
@@ -1035,7 +1087,6 @@ fn load_motions(paths: &[PathBuf]) -> anyhow::Result<Vec<suitcap::bvh::Motion>> 
 /// ([`suitcap::pose::eval::nearest_pose_errors`]).
 fn coverage(suit_dir: &Path, train: &[PathBuf], data: &[PathBuf]) -> anyhow::Result<()> {
     use suitcap::pose::eval::{body_angles, nearest_pose_errors};
-    use suitcap::pose::PoseLayout;
     let suit = SuitDefinition::load_dir(suit_dir)?;
     let joints = suit.skeleton.joints.len().saturating_sub(1);
     let angles_of = |path: &PathBuf, motion: &suitcap::bvh::Motion| {
@@ -1213,7 +1264,8 @@ fn evaluate(
             } else {
                 None
             };
-            let result = pipeline.process(&image, &dataset.camera, truth.as_ref());
+            let given = truth.as_ref().map(suitcap::body_size::Silhouette::whole);
+            let result = pipeline.process(&image, &dataset.camera, given);
             let mut record = FrameError {
                 dataset: dataset_index,
                 frame: index,
@@ -1406,12 +1458,17 @@ fn experiments(
     suit_dir: &Path,
     train: &[PathBuf],
     data: &[PathBuf],
-    bases: &[usize],
     out: &Path,
-    seed: u64,
-    masks: TrainingMasks,
+    run: &ExperimentsRun,
 ) -> anyhow::Result<()> {
     use suitcap::descriptor::{Codebooks, DescriptorKind};
+    let ExperimentsRun {
+        basis: ref bases,
+        seed,
+        masks,
+        rotations,
+    } = *run;
+    let rotations = RotationEncoding::from(rotations);
     use suitcap::pose::regressor::Regressor;
     let suit = SuitDefinition::load_dir(suit_dir)?;
     let codebooks = Codebooks::load(suit_dir)?;
@@ -1423,7 +1480,7 @@ fn experiments(
         template_data.motion.frame_time,
         template_data.motion.frame(0).to_vec(),
     )?;
-    let layout = suitcap::pose::PoseLayout::new(&suit.skeleton, &template.skeleton)?;
+    let layout = PoseLayout::new(&suit.skeleton, &template.skeleton)?.with_rotations(rotations);
     let mut csv = String::from(
         "descriptor,basis,relevance_vectors,train_seconds,mean_euler_deg,mean_geodesic_deg",
     );
@@ -1439,7 +1496,7 @@ fn experiments(
         DescriptorKind::Silhouette,
     ];
     let started = std::time::Instant::now();
-    let sets = TrainingData::collect(&suit, &codebooks, train, &kinds, tables.as_ref())?;
+    let sets = TrainingData::collect(&suit, &codebooks, train, &kinds, tables.as_ref(), rotations)?;
     println!(
         "{} training frames described for the four descriptors in {:.1} s",
         sets[0].frames(),
@@ -1542,11 +1599,9 @@ fn main() -> ExitCode {
             suit,
             train,
             data,
-            basis,
             out,
-            seed,
-            masks,
-        } => experiments(suit, train, data, basis, out, *seed, *masks),
+            run,
+        } => experiments(suit, train, data, out, run),
         Command::Limits { suit, data, margin } => limits(suit, data, *margin),
         Command::Coverage { suit, train, data } => coverage(suit, train, data),
         Command::Import {
@@ -1672,14 +1727,16 @@ mod tests {
             DescriptorKind::Full,
             DescriptorKind::Silhouette,
         ];
+        let euler = suitcap::pose::RotationEncoding::EulerSinCos;
         for segmenter in [None, Some(&tables)] {
             let (all, poses, frames) =
-                training_set(&dataset, &suit, &codebooks, &kinds, segmenter).expect("all");
+                training_set(&dataset, &suit, &codebooks, &kinds, segmenter, euler).expect("all");
             assert_eq!(frames, 3, "the person is in every frame");
             assert_eq!(all.len(), kinds.len());
             for (kind, x) in kinds.iter().zip(&all) {
                 let (alone, alone_poses, alone_frames) =
-                    training_set(&dataset, &suit, &codebooks, &[*kind], segmenter).expect("one");
+                    training_set(&dataset, &suit, &codebooks, &[*kind], segmenter, euler)
+                        .expect("one");
                 assert_eq!(alone_frames, frames);
                 assert_eq!(x.len(), frames * kind.len());
                 assert_eq!(alone, vec![x.clone()], "{}", kind.name());
