@@ -1,10 +1,11 @@
 //! The trained pose regressor of a suit: the RVM, which descriptor it reads, and the skeleton it
 //! writes.
 //!
-//! Stored in the suit directory as `regressor.bin` (the relevance vectors, the weight matrix, the kernel
-//! width, the noise estimate, the descriptor kind and the pose vector's rotation encoding) and `skeleton.bvh` (the training mocap's
-//! hierarchy with one template frame whose values fill the joints the suit does not estimate). The
-//! runtime loads both, predicts a pose vector per frame and decodes it into a BVH frame.
+//! Stored in the suit directory as `regressor.bin` (the relevance vectors, the weight matrix, the
+//! kernel width, the noise estimate, the descriptor kind and the pose vector's rotation encoding)
+//! and `skeleton.bvh` (the training mocap's hierarchy with one template frame whose values fill the
+//! joints the suit does not estimate). The runtime loads both, predicts a pose vector per frame and
+//! decodes it into a BVH frame.
 
 use std::path::{Path, PathBuf};
 

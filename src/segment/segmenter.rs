@@ -33,7 +33,8 @@
 //!    their own colour and the upsampled cut; then moves the outline onto the frame's colour edge
 //!    ([`snap`](super::snap); its time is counted in the refinement's).
 //!
-//! A frame with nobody in it gives an empty mask. The mask goes to marker detection and the descriptors.
+//! A frame with nobody in it gives an empty mask. The mask goes to marker detection and the descriptors;
+//! the box of the suit alone ([`Segmentation::suit_box`]) to the body-size measurement.
 
 use std::time::Instant;
 
