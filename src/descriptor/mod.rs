@@ -35,8 +35,8 @@ pub const SILHOUETTE_CENTRES: usize = 100;
 /// 0.12 for FC alone and 0.08 for HOG alone): where the person stood in the frame counted for more
 /// than their pose. Weighted by ½ and by ¼, the error on the held-back training motions fell from
 /// 7.39° to 7.17° and 7.11° (docs/measurements.md, fourth session of 2026-12-04); a regressor
-/// trained with another weight reads other descriptors, hence
-/// [`crate::pose::regressor::REGRESSOR_VERSION`] 3.
+/// trained with another weight reads other descriptors, hence regressor version 3 (see
+/// [`crate::pose::regressor::REGRESSOR_VERSION`]).
 pub const BOX_WEIGHT: f32 = 0.25;
 /// Model kinds (and file stems) of the codebooks in a suit directory.
 pub const FC_CODEBOOK: &str = "codebook_fc";
