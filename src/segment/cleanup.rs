@@ -54,12 +54,12 @@ pub fn components(
             count += 1;
             let (x, y) = (i % width, i / width);
             border |= x == 0 || y == 0 || x + 1 == width || y + 1 == height;
-            for_each_neighbour(i, width, height, |j| {
+            for j in neighbours4(i, width, height).into_iter().flatten() {
                 if labels[j] == value && ids[j] == u32::MAX {
                     ids[j] = id;
                     stack.push(j);
                 }
-            });
+            }
         }
         stats.push((count, border));
     }
@@ -505,13 +505,13 @@ pub fn attach_parts(
     stack.clear();
     stack.extend((0..person.len()).filter(|&i| person[i]));
     while let Some(i) = stack.pop() {
-        for_each_neighbour(i, width, height, |j| {
+        for j in neighbours4(i, width, height).into_iter().flatten() {
             if band[j] && !person[j] && part_like(j) {
                 person[j] = true;
                 part[j] = true;
                 stack.push(j);
             }
-        });
+        }
     }
     let Some(b) = PixelBox::around(part, width, height, 0) else {
         return Attached::default();
@@ -525,8 +525,10 @@ pub fn attach_parts(
     for (k, &id) in ids.iter().enumerate() {
         if id != u32::MAX {
             let i = b.grid_index(k, width);
-            let mut touches = false;
-            for_each_neighbour(i, width, height, |j| touches |= person[j] && !part[j]);
+            let touches = neighbours4(i, width, height)
+                .into_iter()
+                .flatten()
+                .any(|j| person[j] && !part[j]);
             contact[id as usize] += touches as usize;
             let (x, y) = (k % b.width(), k / b.width());
             let e = &mut boxes[id as usize];
@@ -639,23 +641,6 @@ pub fn attach_parts_narrowing(
         added: wide.added + readded,
         taken_back: wide.taken_back - readded,
         taken_back_at_top: wide.taken_back_at_top - readded,
-    }
-}
-
-/// Calls `visit` with each 4-neighbour of pixel `i` inside a `width`×`height` grid.
-fn for_each_neighbour(i: usize, width: usize, height: usize, mut visit: impl FnMut(usize)) {
-    let (x, y) = (i % width, i / width);
-    if x > 0 {
-        visit(i - 1);
-    }
-    if x + 1 < width {
-        visit(i + 1);
-    }
-    if y > 0 {
-        visit(i - width);
-    }
-    if y + 1 < height {
-        visit(i + width);
     }
 }
 
