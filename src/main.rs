@@ -527,9 +527,9 @@ fn segment(
         if c.components_removed + c.holes_filled + c.off_cloth_pieces > 0 {
             cleaned_frames += 1;
         }
-        removed_px += result.cleanup.pixels_removed;
-        off_cloth_px += result.cleanup.off_cloth_pixels;
-        filled_px += result.cleanup.pixels_filled;
+        removed_px += c.pixels_removed;
+        off_cloth_px += c.off_cloth_pixels;
+        filled_px += c.pixels_filled;
         empty_frames += result.mask.is_empty() as usize;
         let path = out.join(&name);
         result

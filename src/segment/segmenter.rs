@@ -615,7 +615,10 @@ impl Segmenter {
                 &mut self.seen,
             );
         }
-        let suit_box = bounding_box_of(&labels, w).map(|(x0, y0, x1, y1)| {
+        // The suit alone: its box (to the frame for the body size) and its rows (the part limits').
+        let suit_bounds = bounding_box_of(&labels, w);
+        let suit_rows = suit_bounds.map_or(0, |(_, y0, _, y1)| y1 - y0);
+        let suit_box = suit_bounds.map(|(x0, y0, x1, y1)| {
             let to_frame = |v: usize, limit: u32| ((v * factor as usize) as u32).min(limit);
             let (fw, fh) = (frame.width(), frame.height());
             (
@@ -655,7 +658,7 @@ impl Segmenter {
                 max_area: (self.options.part_max_share * suit_area) as usize,
                 max_top_area: (self.options.part_max_top_share * suit_area) as usize,
                 max_round_area: (self.options.part_max_round_share * suit_area) as usize,
-                min_depth: self.options.part_min_depth * region_height(&labels, w) as f32,
+                min_depth: self.options.part_min_depth * suit_rows as f32,
             },
             &mut self.part,
             &mut self.stack,
