@@ -721,7 +721,6 @@ struct TrainingData {
     held_x: Vec<f32>,
     held_y: Vec<f32>,
     dim: usize,
-    outputs: usize,
     /// The pose vectors' layout (the first dataset's skeleton and the chosen rotation encoding).
     layout: PoseLayout,
 }
@@ -755,7 +754,6 @@ impl TrainingData {
                 held_x: Vec::new(),
                 held_y: Vec::new(),
                 dim: kind.len(),
-                outputs: 0,
                 layout: layout.clone(),
             })
             .collect();
@@ -769,9 +767,8 @@ impl TrainingData {
             if n == 0 {
                 continue;
             }
-            let outputs = y.len() / n;
+            let outputs = layout.len();
             for (set, x) in sets.iter_mut().zip(&x) {
-                set.outputs = outputs;
                 for (k, (xi, yi)) in x
                     .chunks_exact(set.dim)
                     .zip(y.chunks_exact(outputs))
@@ -819,7 +816,7 @@ impl TrainingData {
             x.len() / self.dim,
             self.dim,
             &y,
-            self.outputs,
+            self.layout.len(),
             &options,
         )?)
     }
@@ -844,7 +841,8 @@ impl TrainingData {
                 tolerance: 1e-3,
                 seed,
             };
-            let (rvm, report) = Rvm::train(&self.x, n, self.dim, &self.y, self.outputs, &options)?;
+            let (rvm, report) =
+                Rvm::train(&self.x, n, self.dim, &self.y, self.layout.len(), &options)?;
             let error = pose_vector_error(&rvm, &self.layout, &self.held_x, &self.held_y);
             println!(
                 "  width {w:.4} ({factor} × median): {} relevance vectors, held-back angle error {error:.2}°",
