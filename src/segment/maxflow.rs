@@ -26,14 +26,22 @@
 //! * every pre-pass step is a push along a residual edge, which keeps the cost of every cut (the
 //!   flow is an ordinary augmentation; a rounding remainder that stays on a node is residual source
 //!   capacity there), so the result is unchanged;
-//! * residuals are `f32` (as in the reference); the flow is summed in `f64` at the end as
-//!   Σ (src − residual src), which counts the cancelled, pre-pass and augmented flow alike;
-//! * the sweep that makes the roots also grows the trees by one level: a free node next to a root
-//!   joins it as a child if the edge between them has residual capacity in the tree's direction;
-//!   then only tree nodes that touch a free node or the other tree start active (a node inside its
-//!   own tree has nothing to do until adoption frees a neighbour, which re-activates it as in BK).
-//!   On the reference graph 9K nodes start active instead of 114K and growth steps fall from 211K
-//!   to 48K (−10 %);
+//! * residuals are `f32` (as in the reference); the flow is summed in `f64` as Σ (src − residual
+//!   src) when the trees start, which counts the cancelled and pre-pass flow alike, plus the
+//!   bottleneck of each augmenting path;
+//! * the roots are made strip by strip right after the column pass, while the strip is in the
+//!   cache; then the trees grow by one level: a free node next to a root joins it as a child if the
+//!   edge between them has residual capacity in the tree's direction; then only tree nodes that
+//!   touch a free node or the other tree start active (a node inside its own tree has nothing to do
+//!   until adoption frees a neighbour, which re-activates it as in BK). On the reference graph 9K
+//!   nodes start active instead of 114K and growth steps fall from 211K to 48K (−10 %);
+//! * a byte copy of the tree codes beside the node records (0.3 MB at 640x480) is read by the first
+//!   level and the activation, which look at a node's record only where the copy shows that it can
+//!   qualify (a free node next to a tree, a tree node next to another code: 61K and 11K of 307K
+//!   nodes on the reference graph); the search keeps the copy up to date where a node joins or
+//!   leaves a tree, and the labels are read from it instead of from the 10 MB of records. With the
+//!   flow summed as above and each node filled in one store, the reference graph solves in 12.1–12.7
+//!   ms against 14.2–14.8 ms before (alternated runs, 2026-12-05), masks unchanged;
 //! * the active set is a FIFO of node indices with an in-queue flag, orphans are a FIFO too (ring
 //!   buffers); the node a few places ahead in each queue is prefetched, since the solver is bound by
 //!   memory latency;
@@ -56,7 +64,12 @@
 //!   in raster order (fewer growth steps but more orphans, +4..13 %); the root sweep made
 //!   branch-free over all nodes (+10 % in the pre-pass); filling a row in one pass of zipped
 //!   iterators (no change); a second start level (free nodes next to first-level nodes; growth
-//!   steps 48K -> 37K, time within ±4 %);
+//!   steps 48K -> 37K, time within ±4 %); the pre-pass on the residuals in separate arrays, one per
+//!   direction, with the node records written once after it (+15..20 %: the column pass reads
+//!   three arrays); the first level made branch-free (+12..44 % in its sweep), or made per strip of
+//!   8 or 32 columns while the strip is in the cache (+2..6 %); prefetching the row below in the first
+//!   level's sweep, gathering the column pass row by row instead of lane by lane, transparent huge
+//!   pages for the node array (all within ±1 %);
 //! * all buffers live in [`GridMaxFlow`] and are reused: solving graphs of an unchanged size does not
 //!   allocate apart from the returned label vector.
 
@@ -351,63 +364,86 @@ fn fmax(a: f32, b: f32) -> f32 {
     }
 }
 
-/// Saturates source→i→j→sink or source→j→i→sink along the edge from `i` in direction `d` to `j`
+/// Σ `values` in `f64`, in eight running sums so that the additions do not wait on each other.
+fn sum_f64(values: &[f32]) -> f64 {
+    let mut acc = [0.0f64; 8];
+    let mut chunks = values.chunks_exact(8);
+    for c in &mut chunks {
+        for k in 0..8 {
+            acc[k] += c[k] as f64;
+        }
+    }
+    for (a, &v) in acc.iter_mut().zip(chunks.remainder()) {
+        *a += v as f64;
+    }
+    acc.iter().sum()
+}
+
+/// Saturates source→p→q→sink or source→q→p→sink for node `p` and the node `q` below it
 /// (branch-free: at most one of the two amounts is non-zero, so every update is exact).
 #[inline(always)]
-fn push_short(nodes: &mut [Node], i: usize, j: usize, d: usize) {
-    let (tri, trj) = (at(nodes, i).tr, at(nodes, j).tr);
-    let (cij, cji) = (at(nodes, i).cap[d], at(nodes, j).cap[d ^ 1]);
-    let fwd = fmin(fmin(fmax(tri, 0.0), fmax(-trj, 0.0)), cij);
-    let bwd = fmin(fmin(fmax(trj, 0.0), fmax(-tri, 0.0)), cji);
+fn push_short_vertical(p: &mut Node, q: &mut Node) {
+    let (tp, tq) = (p.tr, q.tr);
+    let (cpq, cqp) = (p.cap[3], q.cap[2]);
+    let fwd = fmin(fmin(fmax(tp, 0.0), fmax(-tq, 0.0)), cpq);
+    let bwd = fmin(fmin(fmax(tq, 0.0), fmax(-tp, 0.0)), cqp);
     let delta = fwd - bwd;
-    let ni = at(nodes, i);
-    ni.cap[d] = cij - delta;
-    ni.tr = tri - delta;
-    let nj = at(nodes, j);
-    nj.cap[d ^ 1] = cji + delta;
-    nj.tr = trj + delta;
+    p.cap[3] = cpq - delta;
+    p.tr = tp - delta;
+    q.cap[2] = cqp + delta;
+    q.tr = tq + delta;
 }
 
 /// Writes row `y` of `g` into `cells` (the row's nodes in the padded grid): residual capacities
-/// towards the four neighbours (zero towards the padding) and the cancelled terminal capacity.
-/// Simple passes over slices, so the compiler needs no bounds checks.
+/// towards the four neighbours (zero towards the padding) and the cancelled terminal capacity,
+/// each node in one store.
 fn fill_row(cells: &mut [Node], g: &GridGraph, y: usize) {
     let (w, h) = (g.width, g.height);
+    let cells = &mut cells[..w];
     let src = &g.source[y * w..(y + 1) * w];
     let snk = &g.sink[y * w..(y + 1) * w];
-    for ((n, &s), &t) in cells.iter_mut().zip(src).zip(snk) {
-        *n = Node {
-            tr: s - t,
-            dist: 0,
-            tree: FREE,
-            parent: NO_PARENT,
+    let right = &g.right[y * (w - 1)..(y + 1) * (w - 1)];
+    let up = if y > 0 {
+        Some(&g.down[(y - 1) * w..y * w])
+    } else {
+        None
+    };
+    let down = if y + 1 < h {
+        Some(&g.down[y * w..(y + 1) * w])
+    } else {
+        None
+    };
+    for x in 0..w {
+        let cap = [
+            if x > 0 { right[x - 1] } else { 0.0 },
+            if x + 1 < w { right[x] } else { 0.0 },
+            up.map_or(0.0, |u| u[x]),
+            down.map_or(0.0, |d| d[x]),
+        ];
+        cells[x] = Node {
+            cap,
+            tr: src[x] - snk[x],
             ..Node::default()
         };
     }
-    let right = &g.right[y * (w - 1)..(y + 1) * (w - 1)];
-    for (n, &c) in cells.iter_mut().zip(right) {
-        n.cap[1] = c;
-    }
-    for (n, &c) in cells[1..].iter_mut().zip(right) {
-        n.cap[0] = c;
-    }
-    if y > 0 {
-        for (n, &c) in cells.iter_mut().zip(&g.down[(y - 1) * w..y * w]) {
-            n.cap[2] = c;
-        }
-    }
-    if y + 1 < h {
-        for (n, &c) in cells.iter_mut().zip(&g.down[y * w..(y + 1) * w]) {
-            n.cap[3] = c;
-        }
-    }
+}
+
+/// Makes `node` a root of its tree if it has residual terminal capacity, free otherwise, and copies
+/// its tree code to `tree`. Branch-free: the signs of the residuals are noise-like.
+#[inline(always)]
+fn make_root(node: &mut Node, tree: &mut u8) {
+    let (pos, neg) = ((node.tr > 0.0) as u8, (node.tr < 0.0) as u8);
+    node.tree = pos * SRC + neg * SNK;
+    node.parent = NO_PARENT - (pos | neg) * (NO_PARENT - TERMINAL);
+    node.dist = 1;
+    *tree = node.tree;
 }
 
 /// Grows the trees by one level before the search: a free node `i` next to a root joins that root's
 /// tree as its child if the edge between them has residual capacity in the tree's direction (the
 /// first such neighbour, source roots first). Roots are known from the signs of the terminal
-/// residuals alone, so this works in the same sweep that makes them. Saves the growth steps of
-/// the roots, which then often have no free neighbour left and stay passive.
+/// residuals alone, so the nodes can be visited in any order once those are final. Saves the
+/// growth steps of the roots, which then often have no free neighbour left and stay passive.
 #[inline(always)]
 fn attach_to_root(nodes: &mut [Node], i: usize, off: &[isize; 4]) {
     let ni = *at(nodes, i);
@@ -433,9 +469,28 @@ fn set_parent(n: &mut Node, tree: u8, d: usize) {
     n.dist = 2;
 }
 
-/// Whether root `i` touches, through a residual edge in its tree's direction, a node outside its
-/// tree (free nodes in the padding count; their edges have zero capacity). Branch-free: the trees of
-/// neighbouring roots are noise-like.
+/// For each of the `flags.len()` nodes from node `row` on (a row of the padded grid, or part of
+/// one), whether `keep(code, [left, right, up, down])` holds for its tree code in `trees` and its
+/// four neighbours' (1 or 0; a loop the compiler vectorises).
+#[inline(always)]
+fn cross_flags(
+    trees: &[u8],
+    row: usize,
+    stride: usize,
+    flags: &mut [u8],
+    keep: impl Fn(u8, [u8; 4]) -> bool,
+) {
+    let t = &trees[row - 1 - stride..row + stride + flags.len()];
+    let s = stride;
+    for (x, f) in flags.iter_mut().enumerate() {
+        let n = [t[s + x], t[s + x + 2], t[x + 1], t[2 * s + x + 1]];
+        *f = keep(t[s + x + 1], n) as u8;
+    }
+}
+
+/// Whether tree node `i` touches, through a residual edge in its tree's direction, a node outside
+/// its tree (free nodes in the padding count; their edges have zero capacity). Branch-free: the
+/// trees of neighbouring nodes are noise-like.
 #[inline(always)]
 fn touches_other_tree(nodes: &mut [Node], i: usize, off: &[isize; 4]) -> bool {
     let ni = *at(nodes, i);
@@ -746,6 +801,13 @@ pub struct GridMaxFlow {
     path: Vec<u32>,
     /// Scratch for the row passes of the pre-pass.
     rows: LineScratch,
+    /// A byte copy of the nodes' tree codes (padded like `nodes`): the start of the trees reads
+    /// it, the search keeps it up to date, and the labels are read from it.
+    trees: Vec<u8>,
+    /// The flow of the augmenting paths of the current solve.
+    augmented: f64,
+    /// Scratch for the start of the trees: which nodes of a row could qualify.
+    flags: Vec<u8>,
     stride: usize,
     dims: (usize, usize),
     stats: SolveStats,
@@ -767,6 +829,9 @@ impl GridMaxFlow {
             orphans: Fifo::new(),
             path: Vec::new(),
             rows: LineScratch::default(),
+            trees: Vec::new(),
+            augmented: 0.0,
+            flags: Vec::new(),
             stride: 0,
             dims: (0, 0),
             stats: SolveStats::default(),
@@ -794,40 +859,33 @@ impl GridMaxFlow {
             };
         }
         self.stats = SolveStats::default();
-        self.prepare(g);
+        self.augmented = 0.0;
+        // The flow is what left the source: Σ src − residual src, where the residual source capacity
+        // of a node is its terminal residual when positive (its sink link is then saturated). That
+        // counts the cancelled and pre-pass flow, known when the trees start; each augmentation
+        // then adds its bottleneck.
+        let flow_before_search = self.prepare(g);
         self.stats.initially_active = self.active.len() as u64;
         self.run();
-        // The flow is what left the source: Σ src − residual src, where the residual source capacity
-        // of a node is its terminal residual when positive (its sink link is then saturated).
+        let flow = flow_before_search + self.augmented;
         let stride = self.stride;
         let mut labels = Vec::with_capacity(w * h);
-        let mut acc = [0.0f64; 4];
         for y in 0..h {
             let row = (y + 1) * stride + 1;
-            let nodes = &self.nodes[row..row + w];
-            labels.extend(nodes.iter().map(|n| n.tree == SRC));
-            let src = &g.source[y * w..(y + 1) * w];
-            let mut nc = nodes.chunks_exact(4);
-            let mut sc = src.chunks_exact(4);
-            for (n4, s4) in (&mut nc).zip(&mut sc) {
-                for k in 0..4 {
-                    acc[k] += s4[k] as f64 - fmax(n4[k].tr, 0.0) as f64;
-                }
-            }
-            for (n, &s) in nc.remainder().iter().zip(sc.remainder()) {
-                acc[0] += s as f64 - fmax(n.tr, 0.0) as f64;
-            }
+            labels.extend(self.trees[row..row + w].iter().map(|&t| t == SRC));
         }
-        let flow = (acc[0] + acc[1]) + (acc[2] + acc[3]);
         MaxFlowResult { flow, labels }
     }
 
-    /// Copies the graph into the padded node array, cancels terminal pairs, saturates the short
-    /// paths (if enabled), makes every node with residual terminal capacity a root of its tree and
-    /// activates the roots that touch another tree. One sweep over the rows (later stages lag one and
-    /// two rows behind), so the node array is streamed through the cache once.
+    /// Copies the graph into the padded node array, cancels terminal pairs, routes flow along the
+    /// short paths, rows and columns (if enabled), makes every node with residual terminal capacity
+    /// a root of its tree, grows the trees by one level and activates the nodes that touch another
+    /// tree. Three sweeps: over the rows (fill, short paths, row pass a batch of rows behind), over
+    /// strips of columns (column pass, roots), and over the rows of a byte copy of the trees (first
+    /// level and activation, each only where the copy shows it could apply). Returns the flow so far:
+    /// Σ src − Σ residual source capacity.
     #[inline(never)]
-    fn prepare(&mut self, g: &GridGraph) {
+    fn prepare(&mut self, g: &GridGraph) -> f64 {
         let (w, h) = (g.width, g.height);
         let stride = w + 2;
         // from_parts/new guarantee this fits in u32.
@@ -836,6 +894,8 @@ impl GridMaxFlow {
         if self.nodes.len() != total {
             self.nodes.clear();
             self.nodes.resize(total, Node::default());
+            self.trees.clear();
+            self.trees.resize(total, FREE);
             // Each node is at most once in each queue (in-queue flag; ORPHAN parent code).
             self.active = Fifo::with_capacity(total);
             self.orphans = Fifo::with_capacity(total);
@@ -843,30 +903,37 @@ impl GridMaxFlow {
             if self.dims != (w, h) {
                 // Same node count, other shape: the padding ring moved, so clear everything.
                 self.nodes.fill(Node::default());
+                self.trees.fill(FREE);
             }
-            // Otherwise the padding ring is still all-zero; the interior is rewritten below.
+            // Otherwise the padding ring is still all-zero and free; the interior is rewritten below.
             self.active.clear();
             self.orphans.clear();
         }
         self.dims = (w, h);
+        self.flags.resize(w, 0);
         let prepass = self.prepass;
         let nodes = &mut self.nodes;
+        let trees = &mut self.trees;
+        let flags = &mut self.flags;
         let active = &mut self.active;
         let rows = &mut self.rows;
         let off = [-1isize, 1, -(stride as isize), stride as isize];
         // Rows [0, passed) have had the row pass. Row r of the graph is the padded row r + 1.
         let mut passed = 0;
+        let mut source_total = 0.0;
         for y in 0..h {
             let row = (y + 1) * stride + 1;
             fill_row(&mut nodes[row..row + w], g, y);
+            source_total += sum_f64(&g.source[y * w..(y + 1) * w]);
             if !prepass {
                 continue;
             }
             // Short vertical paths source→p→q→sink first; the row pass below covers the
             // horizontal ones (and longer paths along the row).
             if y > 0 {
-                for i in row..row + w {
-                    push_short(nodes, i - stride, i, 3);
+                let (above, this) = nodes[row - stride..row + w].split_at_mut(stride);
+                for (p, q) in above[..w].iter_mut().zip(this) {
+                    push_short_vertical(p, q);
                 }
             }
             // Rows [0, complete) have seen all their short paths: route what is left along them,
@@ -886,49 +953,69 @@ impl GridMaxFlow {
                 passed += n;
             }
         }
-        if prepass {
-            // Then along the columns, a strip of columns at a time.
-            for x0 in (0..w).step_by(LINE_BATCH) {
+        // Then along the columns, a strip of columns at a time. The terminal residuals of a strip
+        // are then final: its roots are made while it is in the cache (and copied to `trees`).
+        let row_of = |y: usize| (y + 1) * stride + 1;
+        let mut residual_source = [0.0f64; LINE_BATCH];
+        for x0 in (0..w).step_by(LINE_BATCH) {
+            let n = LINE_BATCH.min(w - x0);
+            if prepass {
                 let lines = Lines {
-                    first: stride + 1 + x0,
+                    first: row_of(0) + x0,
                     lane_step: 1,
                     step: stride,
                     len: h,
-                    n: LINE_BATCH.min(w - x0),
+                    n,
                     lo_dir: 2,
                 };
                 push_along_lines(nodes, lines, rows);
             }
+            for y in 0..h {
+                let cells = row_of(y) + x0..row_of(y) + x0 + n;
+                let strip = nodes[cells.clone()].iter_mut().zip(&mut trees[cells]);
+                for ((node, t), acc) in strip.zip(&mut residual_source) {
+                    make_root(node, t);
+                    *acc += fmax(node.tr, 0.0) as f64;
+                }
+            }
         }
-        // The terminal residuals are final: make the roots, and activate those that touch, through
-        // a residual edge, a node outside their own tree (one row behind, once the row below has
-        // its trees). A root surrounded by its own tree is passive; adoption re-activates it if a
-        // neighbour is freed, as for any passive node.
+        // Then the first level of the trees, and the activation of the nodes that touch, through a
+        // residual edge, a node outside their own tree (one row behind, once the row below has its
+        // first level). A root surrounded by its own tree is passive; adoption re-activates it if a
+        // neighbour is freed, as for any passive node. Both look only at the nodes that the byte
+        // copy of the trees shows could qualify (a vectorised pass over a row): a free node next
+        // to a node in a tree, a node in a tree next to one that is not in the same tree.
         for y in 0..=h {
             if y < h {
-                let row = (y + 1) * stride + 1;
-                // Branch-free: the signs of the residuals are noise-like.
-                for node in &mut nodes[row..row + w] {
-                    let (pos, neg) = ((node.tr > 0.0) as u8, (node.tr < 0.0) as u8);
-                    node.tree = pos * SRC + neg * SNK;
-                    node.parent = NO_PARENT - (pos | neg) * (NO_PARENT - TERMINAL);
-                    node.dist = 1;
-                }
-                for i in row..row + w {
-                    if at(nodes, i).tr == 0.0 {
-                        attach_to_root(nodes, i, &off);
+                // A free node can only join a root next to it.
+                let row = row_of(y);
+                cross_flags(trees, row, stride, flags, |c, n| {
+                    (c == FREE) & (n != [FREE; 4])
+                });
+                for (x, &f) in flags.iter().enumerate() {
+                    if f != 0 {
+                        attach_to_root(nodes, row + x, &off);
+                        trees[row + x] = at(nodes, row + x).tree;
                     }
                 }
             }
             if y >= 1 {
-                let row = y * stride + 1;
-                for i in row..row + w {
-                    let act = touches_other_tree(nodes, i, &off);
-                    at(nodes, i).in_queue = act as u8;
-                    active.push_if(i as u32, act);
+                // Only a node with a neighbour outside its tree can touch another tree.
+                let row = row_of(y - 1);
+                cross_flags(trees, row, stride, flags, |c, n| {
+                    (c != FREE) & (n != [c; 4])
+                });
+                for (x, &f) in flags.iter().enumerate() {
+                    if f != 0 {
+                        let i = row + x;
+                        let act = touches_other_tree(nodes, i, &off);
+                        at(nodes, i).in_queue = act as u8;
+                        active.push_if(i as u32, act);
+                    }
                 }
             }
         }
+        source_total - residual_source.iter().sum::<f64>()
     }
 
     /// The BK main loop: grow, augment, adopt until no active node is left.
@@ -975,6 +1062,7 @@ impl GridMaxFlow {
                         let nj = at(&mut self.nodes, j);
                         if nj.tree == FREE {
                             nj.tree = SRC;
+                            self.trees[j] = SRC;
                             nj.parent = (d ^ 1) as u8;
                             nj.ts = ni.ts;
                             nj.dist = ni.dist + 1;
@@ -999,6 +1087,7 @@ impl GridMaxFlow {
                     if nj.cap[d ^ 1] > 0.0 {
                         if nj.tree == FREE {
                             nj.tree = SNK;
+                            self.trees[j] = SNK;
                             nj.parent = (d ^ 1) as u8;
                             nj.ts = ni.ts;
                             nj.dist = ni.dist + 1;
@@ -1074,6 +1163,7 @@ impl GridMaxFlow {
         }
         b = fmin(b, -at(nodes, u).tr);
 
+        self.augmented += b as f64;
         at(nodes, s).cap[d] -= b;
         at(nodes, t).cap[d ^ 1] += b;
         let (src_side, snk_side) = path.split_at(split);
@@ -1214,6 +1304,7 @@ impl GridMaxFlow {
             let nu = at(&mut self.nodes, u);
             nu.tree = FREE;
             nu.parent = NO_PARENT;
+            self.trees[u] = FREE;
         }
     }
 }
@@ -1238,6 +1329,42 @@ mod tests {
             best = best.min(g.cut_cost(&labels));
         }
         best
+    }
+
+    #[test]
+    fn cross_flags_look_at_a_node_and_its_four_neighbours() {
+        // A padded 3x2 grid (stride 5): S = source tree, T = sink tree, . = free.
+        //   . . . . .
+        //   . S S T .
+        //   . S . S .
+        //   . . . . .
+        let (f, s, t) = (FREE, SRC, SNK);
+        #[rustfmt::skip]
+        let trees = [
+            f, f, f, f, f,
+            f, s, s, t, f,
+            f, s, f, s, f,
+            f, f, f, f, f,
+        ];
+        let mut flags = [9u8; 3];
+        // Free nodes next to a tree: only the free one in the second row.
+        cross_flags(&trees, 6, 5, &mut flags, |c, n| {
+            (c == FREE) & (n != [FREE; 4])
+        });
+        assert_eq!(flags, [0, 0, 0]);
+        cross_flags(&trees, 11, 5, &mut flags, |c, n| {
+            (c == FREE) & (n != [FREE; 4])
+        });
+        assert_eq!(flags, [0, 1, 0]);
+        // Tree nodes with a neighbour outside their tree: every one here touches the padding.
+        cross_flags(&trees, 6, 5, &mut flags, |c, n| (c != FREE) & (n != [c; 4]));
+        assert_eq!(flags, [1, 1, 1]);
+        // Part of a row: the middle node of the first row alone.
+        let mut one = [9u8; 1];
+        cross_flags(&trees, 7, 5, &mut one, |c, n| {
+            c == SRC && n == [SRC, SNK, FREE, FREE]
+        });
+        assert_eq!(one, [1]);
     }
 
     #[test]
