@@ -1566,6 +1566,7 @@ mod tests {
         let p = (
             mf.nodes.as_ptr(),
             mf.nodes.capacity(),
+            mf.trees.as_ptr(),
             mf.active.capacity(),
             mf.orphans.capacity(),
         );
@@ -1575,6 +1576,7 @@ mod tests {
             (
                 mf.nodes.as_ptr(),
                 mf.nodes.capacity(),
+                mf.trees.as_ptr(),
                 mf.active.capacity(),
                 mf.orphans.capacity()
             )
