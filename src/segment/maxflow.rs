@@ -21,8 +21,9 @@
 //!   every vertical path source→p→q→sink is saturated, then each row and then each column gets a
 //!   1-D max-flow pass (a sweep computing how much sink capacity is reachable further along, then a
 //!   sweep carrying flow towards it; right then left, down then up), 8 rows or columns in lock-step
-//!   so that the sweeps' dependency chains overlap. On the reference graph this leaves the trees
-//!   5.5K augmentations instead of 29K, at about 1.5 ms for the passes;
+//!   so that the sweeps' dependency chains overlap (one AVX register where the processor has it).
+//!   On the reference graph this leaves the trees 5.5K augmentations instead of 29K, at about
+//!   1.5 ms for the passes;
 //! * every pre-pass step is a push along a residual edge, which keeps the cost of every cut (the
 //!   flow is an ordinary augmentation; a rounding remainder that stays on a node is residual source
 //!   capacity there), so the result is unchanged;
@@ -510,7 +511,7 @@ const LINE_BATCH: usize = 8;
 type Lanes = [f32; LINE_BATCH];
 
 /// Scratch for [`push_along_lines`]: per position along the lines, one lane per line of the batch.
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 struct LineScratch {
     tr: Vec<Lanes>,
     /// Residual capacity towards the previous position (left or up).
@@ -565,8 +566,7 @@ fn push_along_lines(nodes: &mut [Node], lines: Lines, s: &mut LineScratch) {
         }
     }
     // Unused lanes are all zero: nothing flows in them.
-    sweep_lanes(&mut s.tr, &mut s.hi, &mut s.lo, &mut s.demand, false);
-    sweep_lanes(&mut s.tr, &mut s.lo, &mut s.hi, &mut s.demand, true);
+    sweep_both_ways(s);
     for lane in 0..lines.n {
         for k in 0..len {
             let node = &mut nodes[lines.node(lane, k)];
@@ -577,6 +577,31 @@ fn push_along_lines(nodes: &mut [Node], lines: Lines, s: &mut LineScratch) {
     }
 }
 
+/// The two sweeps of [`push_along_lines`] (towards the line's end, then back), compiled for AVX
+/// where the processor has it (checked at run time): the eight lanes are then one register. About
+/// 4 % of the solve on the reference graph (11.86 against 12.41 ms, twelve alternated runs); the
+/// same arithmetic, so the same residuals.
+fn sweep_both_ways(s: &mut LineScratch) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the processor has AVX (checked just above).
+        return unsafe { sweep_both_ways_avx(s) };
+    }
+    sweep_both_ways_with(s)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn sweep_both_ways_avx(s: &mut LineScratch) {
+    sweep_both_ways_with(s)
+}
+
+#[inline(always)]
+fn sweep_both_ways_with(s: &mut LineScratch) {
+    sweep_lanes(&mut s.tr, &mut s.hi, &mut s.lo, &mut s.demand, false);
+    sweep_lanes(&mut s.tr, &mut s.lo, &mut s.hi, &mut s.demand, true);
+}
+
 /// One direction of the row pass, for each lane: `fwd[x]` is the residual capacity from column x
 /// to the next column in the sweep (`x + 1`, or `x - 1` if `leftward`), `back[x]` the opposite one.
 ///
@@ -585,6 +610,7 @@ fn push_along_lines(nodes: &mut [Node], lines: Lines, s: &mut LineScratch) {
 /// node, never more than the rest can absorb. Each step is an ordinary push along a residual edge;
 /// a rounding remainder stays on a node as residual source capacity, which is also a valid state
 /// (the flow is still Σ source − residual source, see [`GridMaxFlow::solve`]).
+#[inline(always)]
 fn sweep_lanes(
     tr: &mut [Lanes],
     fwd: &mut [Lanes],
@@ -1329,6 +1355,37 @@ mod tests {
             best = best.min(g.cut_cost(&labels));
         }
         best
+    }
+
+    #[test]
+    fn the_line_sweeps_give_the_same_residuals_in_avx_and_without() {
+        // Lines of 50 nodes, eight lanes, residuals of both signs and capacities from a simple
+        // generator; both builds of the sweeps must agree bit for bit.
+        let mut seed = 12345u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+            (seed >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let mut lanes = |len: usize, signed: bool| -> Vec<Lanes> {
+            (0..len)
+                .map(|_| std::array::from_fn(|_| if signed { 2.0 * next() - 1.0 } else { next() }))
+                .collect()
+        };
+        let start = LineScratch {
+            tr: lanes(50, true),
+            lo: lanes(50, false),
+            hi: lanes(50, false),
+            demand: vec![[0.0; LINE_BATCH]; 51],
+        };
+        let (mut plain, mut dispatched) = (start.clone(), start.clone());
+        sweep_both_ways_with(&mut plain);
+        sweep_both_ways(&mut dispatched);
+        assert_ne!(plain.tr, start.tr, "something flowed");
+        let bits = |s: &LineScratch| {
+            [&s.tr, &s.lo, &s.hi]
+                .map(|v| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>())
+        };
+        assert_eq!(bits(&plain), bits(&dispatched));
     }
 
     #[test]
