@@ -105,13 +105,25 @@ fn main() -> ExitCode {
         mf.set_prepass(false);
     }
     let mut times = Vec::with_capacity(reps);
+    let mut phases: [Vec<f64>; 3] = Default::default();
     let mut result = mf.solve(&g); // warm-up (allocates buffers)
     for _ in 0..reps {
         let t = Instant::now();
         result = mf.solve(&g);
         times.push(t.elapsed().as_secs_f64() * 1e3);
+        let p = mf.times();
+        for (v, ms) in phases
+            .iter_mut()
+            .zip([p.prepare_ms, p.search_ms, p.labels_ms])
+        {
+            v.push(ms);
+        }
     }
     println!("ours: {:?}", mf.stats());
+    let [prepare, search, labels] = phases.map(|v| median(&v).unwrap_or(f64::NAN));
+    println!(
+        "ours: phases (medians) prepare {prepare:.2} ms, search {search:.2} ms, labels {labels:.2} ms"
+    );
     let fg = result.labels.iter().filter(|&&l| l).count();
     let cut = g.cut_cost(&result.labels);
     let min = times.iter().cloned().fold(f64::INFINITY, f64::min);
