@@ -339,53 +339,35 @@ pub fn neighbours4(i: usize, width: usize, height: usize) -> [Option<usize>; 4] 
 /// returns how many pieces and pixels that removed. On the suit everything that is not cloth is a
 /// marker, and markers are 4 cm squares with 3 cm of cloth between them, so a larger piece of the
 /// person's region that is not cloth is background the cut took in (an orange, a tabby cat,
-/// skin-coloured wood between the legs; the head, hands and shoes are attached afterwards).
-#[allow(clippy::too_many_arguments)] // the grid, the rule and three reused buffers
+/// skin-coloured wood between the legs; the head, hands and shoes are attached afterwards). The
+/// pieces are the [`components`] of the box around the region; `crop` and `ids` are scratch.
 pub fn remove_large_off_cloth(
     region: &mut [bool],
     width: usize,
     height: usize,
     off_cloth: impl Fn(usize) -> bool,
     max_area: usize,
-    stack: &mut Vec<usize>,
-    piece: &mut Vec<usize>,
-    seen: &mut Vec<bool>,
+    crop: &mut Vec<bool>,
+    ids: &mut Vec<u32>,
 ) -> (usize, usize) {
     let Some(b) = PixelBox::around(region, width, height, 0) else {
         return (0, 0);
     };
-    seen.clear();
-    seen.resize(width * height, false);
-    let (mut pieces, mut removed) = (0, 0);
-    for y in b.y0..b.y1 {
-        for x in b.x0..b.x1 {
-            let start = y * width + x;
-            if seen[start] || !region[start] || !off_cloth(start) {
-                continue;
-            }
-            seen[start] = true;
-            stack.clear();
-            piece.clear();
-            stack.push(start);
-            while let Some(i) = stack.pop() {
-                piece.push(i);
-                for j in neighbours4(i, width, height).into_iter().flatten() {
-                    if !seen[j] && region[j] && off_cloth(j) {
-                        seen[j] = true;
-                        stack.push(j);
-                    }
-                }
-            }
-            if piece.len() > max_area {
-                pieces += 1;
-                removed += piece.len();
-                for &i in piece.iter() {
-                    region[i] = false;
-                }
-            }
-        }
+    crop.clear();
+    crop.extend((0..b.width() * b.height()).map(|k| {
+        let i = b.grid_index(k, width);
+        region[i] && off_cloth(i)
+    }));
+    let stats = components(crop, b.width(), b.height(), true, ids);
+    let too_large = |id: u32| id != u32::MAX && stats[id as usize].0 > max_area;
+    for (k, _) in ids.iter().enumerate().filter(|&(_, &id)| too_large(id)) {
+        region[b.grid_index(k, width)] = false;
     }
-    (pieces, removed)
+    let mut removed = (0, 0);
+    for &(count, _) in stats.iter().filter(|&&(count, _)| count > max_area) {
+        removed = (removed.0 + 1, removed.1 + count);
+    }
+    removed
 }
 
 /// Rows spanned by the set pixels of `region` (row-major, `width` wide); 0 when none is set.
@@ -681,47 +663,21 @@ mod tests {
         ];
         let mut region = vec![true; 24];
         region[17] = false; // not the person: stays out
-        let (mut stack, mut piece, mut seen) = (Vec::new(), Vec::new(), Vec::new());
-        let found = remove_large_off_cloth(
-            &mut region,
-            6,
-            4,
-            |i| off[i] == 1,
-            4,
-            &mut stack,
-            &mut piece,
-            &mut seen,
-        );
+        let (mut crop, mut ids) = (Vec::new(), Vec::new());
+        let found =
+            remove_large_off_cloth(&mut region, 6, 4, |i| off[i] == 1, 4, &mut crop, &mut ids);
         assert_eq!(found, (1, 5));
         let removed: Vec<usize> = (0..24).filter(|&i| !region[i]).collect();
         assert_eq!(removed, [9, 15, 17, 21, 22, 23]);
         // At a limit of 3 the marker goes too; an empty region changes nothing.
         let mut region = vec![true; 24];
         assert_eq!(
-            remove_large_off_cloth(
-                &mut region,
-                6,
-                4,
-                |i| off[i] == 1,
-                3,
-                &mut stack,
-                &mut piece,
-                &mut seen
-            ),
+            remove_large_off_cloth(&mut region, 6, 4, |i| off[i] == 1, 3, &mut crop, &mut ids),
             (2, 9)
         );
         let mut empty = vec![false; 24];
         assert_eq!(
-            remove_large_off_cloth(
-                &mut empty,
-                6,
-                4,
-                |_| true,
-                0,
-                &mut stack,
-                &mut piece,
-                &mut seen
-            ),
+            remove_large_off_cloth(&mut empty, 6, 4, |_| true, 0, &mut crop, &mut ids),
             (0, 0)
         );
     }

@@ -227,9 +227,6 @@ pub struct Segmenter {
     /// A marker's side as a share of the cut region's height (the suit's marker size on a
     /// person of [`PERSON_HEIGHT_CM`]).
     marker_side_share: f32,
-    /// Scratch of `cleanup::remove_large_off_cloth`.
-    piece: Vec<usize>,
-    seen: Vec<bool>,
 }
 
 /// −ln Σ_class p(class · COLOUR_BINS + bin) of a joint colour × pattern NLL table.
@@ -336,8 +333,6 @@ impl Segmenter {
             narrow_parts: (Vec::new(), Vec::new()),
             stack: Vec::new(),
             marker_side_share: suit.marker_size_cm / PERSON_HEIGHT_CM,
-            piece: Vec::new(),
-            seen: Vec::new(),
         }
     }
 
@@ -610,9 +605,8 @@ impl Segmenter {
                 h,
                 |i| colours[i].chromatic && !gate.is_cloth(colours[i]),
                 max_area,
-                &mut self.stack,
-                &mut self.piece,
-                &mut self.seen,
+                &mut crop,
+                &mut ids,
             );
         }
         // The suit alone: its box (to the frame for the body size) and its rows (the part limits').
