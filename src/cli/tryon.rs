@@ -713,7 +713,7 @@ pub fn drape(
                 continue;
             }
         };
-        let silhouette = suitcap::body_size::Silhouette::whole(&empty);
+        let silhouette = Silhouette::whole(&empty);
         let cloth = stage.advance(motion.frame(k), k as f64 / fps, true, silhouette, &camera)?;
         vertices = cloth.positions.len();
         if let Some(q) = cloth.quality {
