@@ -11,6 +11,7 @@ use std::path::Path;
 
 use glam::Vec3;
 use image::RgbImage;
+use suitcap::body_size::Silhouette;
 use suitcap::bvh::Motion;
 use suitcap::camera::{Camera, Intrinsics};
 use suitcap::cloth::Capsule;
@@ -53,7 +54,7 @@ fn main() -> anyhow::Result<()> {
     let fps = motion.frame_rate();
     let mut cloth = None;
     for k in 0..=last.min(motion.frame_count() - 1) {
-        let silhouette = suitcap::body_size::Silhouette::whole(&empty);
+        let silhouette = Silhouette::whole(&empty);
         let c = stage.advance(motion.frame(k), k as f64 / fps, true, silhouette, &dummy)?;
         if let Some(q) = &c.quality {
             if q.strain_max > 0.10 || q.penetration_cm > 0.2 {

@@ -109,6 +109,16 @@ impl<'a> Silhouette<'a> {
     }
 }
 
+impl<'a> From<&'a crate::segment::Segmentation> for Silhouette<'a> {
+    /// The segmenter's mask with its suit box.
+    fn from(segmentation: &'a crate::segment::Segmentation) -> Silhouette<'a> {
+        Silhouette {
+            mask: &segmentation.mask,
+            suit_box: segmentation.suit_box,
+        }
+    }
+}
+
 /// The template body as the camera sees it: its mask, and the box of its visible suit parts.
 #[derive(Clone, Debug)]
 pub struct ModelView {

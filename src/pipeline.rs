@@ -65,6 +65,16 @@ pub struct PoseFrame {
     pub times: PoseTimes,
 }
 
+impl<'a> From<&'a PoseFrame> for Silhouette<'a> {
+    /// The mask the pose was estimated in, with the suit's box where the segmenter gave one.
+    fn from(pose: &'a PoseFrame) -> Silhouette<'a> {
+        Silhouette {
+            mask: &pose.mask,
+            suit_box: pose.suit_box,
+        }
+    }
+}
+
 /// One stream's pose estimator.
 pub struct PosePipeline {
     pub suit: SuitDefinition,

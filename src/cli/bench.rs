@@ -19,6 +19,7 @@ use std::time::Instant;
 use anyhow::bail;
 use clap::Args;
 
+use suitcap::body_size::Silhouette;
 use suitcap::cloth::garment::{GarmentKind, GarmentMesh};
 use suitcap::source::memory::MemorySource;
 use suitcap::tryon::runner::{self, Controls, InputKind, PoseStage};
@@ -206,10 +207,7 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
             &result.frame,
             k as f64 / 30.0,
             result.person,
-            suitcap::body_size::Silhouette {
-                mask: &result.mask,
-                suit_box: result.suit_box,
-            },
+            Silhouette::from(&result),
             &camera,
         )?;
         vertices = vertices.max(c.positions.len());

@@ -22,11 +22,10 @@ use image::RgbImage;
 
 use crate::body_size::Silhouette;
 use crate::camera::Camera;
-use crate::mask::Mask;
 use crate::pipeline::{PoseFrame, PosePipeline};
 use crate::pose::smoothing::PoseFilter;
 use crate::queue::{Full, StageQueue};
-use crate::segment::Segmenter;
+use crate::segment::{Segmentation, Segmenter};
 use crate::source::{FrameSource, SourceError};
 
 use super::{
@@ -169,9 +168,8 @@ struct Captured {
 
 struct Segmented {
     captured: Captured,
-    mask: Option<Mask>,
-    /// The suit's box of the segmentation ([`crate::segment::Segmentation::suit_box`]).
-    suit_box: Option<(u32, u32, u32, u32)>,
+    /// `None` when the pose stage segments for itself.
+    segmentation: Option<Segmentation>,
     segment_ms: f64,
 }
 
@@ -233,8 +231,7 @@ pub fn run(
                     let segment_ms = started.elapsed().as_secs_f64() * 1e3;
                     let item = Segmented {
                         captured,
-                        suit_box: segmentation.as_ref().and_then(|s| s.suit_box),
-                        mask: segmentation.map(|s| s.mask),
+                        segmentation,
                         segment_ms,
                     };
                     if output.push(item).is_err() {
@@ -250,15 +247,14 @@ pub fn run(
             scope.spawn(move || {
                 while let Some(Segmented {
                     captured,
-                    mask,
-                    suit_box,
+                    segmentation,
                     segment_ms,
                 }) = input.pop()
                 {
                     let time = captured.timestamp_s;
-                    let given = mask.as_ref().map(|mask| Silhouette { mask, suit_box });
+                    let given = segmentation.as_ref().map(Silhouette::from);
                     let mut pose = pose_stage.process(&captured.image, given, &camera, time);
-                    if mask.is_some() {
+                    if segmentation.is_some() {
                         pose.times.segment = segment_ms;
                     }
                     if output.push(Posed { captured, pose }).is_err() {
@@ -281,10 +277,7 @@ pub fn run(
                                 stage.set_garment(garment);
                             }
                             let time = posed.captured.timestamp_s;
-                            let silhouette = Silhouette {
-                                mask: &p.mask,
-                                suit_box: p.suit_box,
-                            };
+                            let silhouette = Silhouette::from(p);
                             match stage.advance(&p.frame, time, p.person, silhouette, &camera) {
                                 Ok(cloth) => (cloth, None),
                                 Err(e) => (

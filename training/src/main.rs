@@ -868,8 +868,8 @@ struct ExperimentsRun {
     /// `segmenter` (default, as the shipped suit is trained) or `truth`.
     #[arg(long, value_enum, default_value_t = TrainingMasks::Segmenter)]
     masks: TrainingMasks,
-    /// How the pose vector writes each joint's rotation, as for `suit`.
-    #[arg(long, value_enum, default_value_t = RotationsArg::Euler)]
+    /// How the pose vector writes each joint's rotation, as for `suit` (default `matrix`).
+    #[arg(long, value_enum, default_value_t = RotationsArg::Matrix)]
     rotations: RotationsArg,
 }
 
@@ -900,10 +900,11 @@ struct SuitRun {
     /// chosen on the 6 held-back frames of the training sequence alone.
     #[arg(long)]
     validate: Vec<PathBuf>,
-    /// How the pose vector writes each joint's rotation: `euler` (the paper's sine and cosine of
-    /// each BVH angle) or `matrix` (the first two columns of the rotation matrix, continuous where
-    /// a raised arm's Euler angles jump).
-    #[arg(long, value_enum, default_value_t = RotationsArg::Euler)]
+    /// How the pose vector writes each joint's rotation: `matrix` (default, as the default suit
+    /// is trained: the first two columns of the rotation matrix, continuous where a raised arm's
+    /// Euler angles jump; 0.2–0.3° better on held-back and novel motions) or `euler` (the paper's
+    /// sine and cosine of each BVH angle). Both give 6 values per joint.
+    #[arg(long, value_enum, default_value_t = RotationsArg::Matrix)]
     rotations: RotationsArg,
 }
 
