@@ -127,7 +127,8 @@ pub struct SegmenterOptions {
     /// only: 0.9389, **0.9391**, 0.9391, 0.9387 at 1, 1.5, 2, 3 nats (radius 2; radius 1 or 3 at
     /// 1.5 nats 0.9389, 0.9391); at 1.5 the run over coffee +0.008, the palest subject over
     /// coffee +0.011, no rendering down by more than 0.0004 (docs/measurements.md, eighth
-    /// session of 2026-12-05).
+    /// session of 2026-12-05). Where the memory joins a head to background beside it into a
+    /// piece too large for a head (taken back whole), the pieces found without it are kept.
     pub part_memory: f32,
 }
 
@@ -246,6 +247,8 @@ pub struct Segmenter {
     /// (empty: none), and the row pass's scratch.
     previous_parts: Vec<bool>,
     grown_rows: Vec<bool>,
+    /// The person and parts found without the memory, where the memory's pass took back a head.
+    plain_parts: (Vec<bool>, Vec<bool>),
     /// The person and parts of the narrow band's pass (see [`attach_parts_narrowing`]).
     narrow_parts: (Vec<bool>, Vec<bool>),
     stack: Vec<usize>,
@@ -357,6 +360,7 @@ impl Segmenter {
             part: Vec::new(),
             previous_parts: Vec::new(),
             grown_rows: Vec::new(),
+            plain_parts: (Vec::new(), Vec::new()),
             narrow_parts: (Vec::new(), Vec::new()),
             stack: Vec::new(),
             marker_side_share: suit.marker_size_cm / PERSON_HEIGHT_CM,
@@ -673,30 +677,61 @@ impl Segmenter {
             0.0
         };
         let previous_parts = &self.previous_parts;
-        let attached = attach_parts_narrowing(
-            &mut person,
-            (&self.band, &self.narrow_band),
-            w,
-            h,
-            |i| {
+        let part_like = |remember: bool| {
+            move |i: usize| {
                 let bin = colours[i].bin as usize;
-                let remembered = if memory > 0.0 && previous_parts[i] {
+                let remembered = if remember && previous_parts[i] {
                     memory
                 } else {
                     0.0
                 };
                 sigma * part_nll[bin] + prior[1] - remembered < sigma * bg[bin] + prior[0]
-            },
-            PartLimits {
-                max_area: (self.options.part_max_share * suit_area) as usize,
-                max_top_area: (self.options.part_max_top_share * suit_area) as usize,
-                max_round_area: (self.options.part_max_round_share * suit_area) as usize,
-                min_depth: self.options.part_min_depth * suit_rows as f32,
-            },
+            }
+        };
+        let limits = PartLimits {
+            max_area: (self.options.part_max_share * suit_area) as usize,
+            max_top_area: (self.options.part_max_top_share * suit_area) as usize,
+            max_round_area: (self.options.part_max_round_share * suit_area) as usize,
+            min_depth: self.options.part_min_depth * suit_rows as f32,
+        };
+        let mut attached = attach_parts_narrowing(
+            &mut person,
+            (&self.band, &self.narrow_band),
+            w,
+            h,
+            part_like(memory > 0.0),
+            limits,
             &mut self.part,
             &mut self.stack,
             &mut self.narrow_parts,
         );
+        if memory > 0.0 && attached.taken_back_at_top > 0 {
+            // The memory can join a head to background beside it into a piece too large for a
+            // head, which is then taken back whole: the pieces found without it are added too.
+            let (plain_person, plain_part) = &mut self.plain_parts;
+            plain_person.clone_from(&labels);
+            attach_parts_narrowing(
+                plain_person,
+                (&self.band, &self.narrow_band),
+                w,
+                h,
+                part_like(false),
+                limits,
+                plain_part,
+                &mut self.stack,
+                &mut self.narrow_parts,
+            );
+            for ((p, q), &n) in person
+                .iter_mut()
+                .zip(self.part.iter_mut())
+                .zip(plain_part.iter())
+            {
+                if n && !*q {
+                    (*p, *q) = (true, true);
+                    attached.added += 1;
+                }
+            }
+        }
         if self.options.part_memory > 0.0 {
             // The head: the parts above the suit's top row (none with nobody in the frame). On a
             // stream's first frame, segmented twice, the second look remembers the first's.
