@@ -560,6 +560,19 @@ pub struct Attached {
     pub taken_back_at_top: usize,
 }
 
+/// Adds to `person` and `part` the pixels `found` marks as parts that `part` does not; returns
+/// how many.
+pub fn add_parts(person: &mut [bool], part: &mut [bool], found: &[bool]) -> usize {
+    let mut added = 0;
+    for ((p, q), &n) in person.iter_mut().zip(part.iter_mut()).zip(found) {
+        if n && !*q {
+            (*p, *q) = (true, true);
+            added += 1;
+        }
+    }
+    added
+}
+
 /// [`attach_parts`] within `band`, and where that took back a piece reaching the suit's top row, a
 /// second look for heads within `narrow` (a band inside `band`): the pieces of that pass that
 /// reach as high as the suit's top row and fit `max_top_area` are added too (`part` marks the
@@ -608,17 +621,7 @@ pub fn attach_parts_narrowing(
         stack,
     );
     // The narrow pass's pieces lie within the wide pass's, so only those taken back are new.
-    let mut readded = 0;
-    for ((p, q), &n) in person
-        .iter_mut()
-        .zip(part.iter_mut())
-        .zip(narrow_part.iter())
-    {
-        if n && !*q {
-            (*p, *q) = (true, true);
-            readded += 1;
-        }
-    }
+    let readded = add_parts(person, part, narrow_part);
     Attached {
         added: wide.added + readded,
         taken_back: wide.taken_back - readded,

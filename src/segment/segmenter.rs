@@ -44,7 +44,7 @@ use std::time::Instant;
 use image::RgbImage;
 
 use super::cleanup::{
-    attach_parts_narrowing, clean, distance_near, part_bands, region_height,
+    add_parts, attach_parts_narrowing, clean, distance_near, part_bands, region_height,
     remove_large_off_cloth, CleanupReport, PartLimits, PixelBox, RegionRule, ATTACH_REACH,
     PART_REACH,
 };
@@ -721,16 +721,7 @@ impl Segmenter {
                 &mut self.stack,
                 &mut self.narrow_parts,
             );
-            for ((p, q), &n) in person
-                .iter_mut()
-                .zip(self.part.iter_mut())
-                .zip(plain_part.iter())
-            {
-                if n && !*q {
-                    (*p, *q) = (true, true);
-                    attached.added += 1;
-                }
-            }
+            attached.added += add_parts(&mut person, &mut self.part, plain_part);
         }
         if self.options.part_memory > 0.0 {
             // The head: the parts above the suit's top row (none with nobody in the frame). On a
