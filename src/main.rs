@@ -102,6 +102,11 @@ enum Command {
         /// Override the trained term weights σ_C,σ_N,σ_G,σ_M,σ_T (for experiments), e.g. 2,1,1,0,1.
         #[arg(long, value_delimiter = ',')]
         weights: Option<Vec<f32>>,
+        /// How many nats the part test leans towards the part where the previous frame attached
+        /// a head (default 1.5; 0 switches the memory off, as before the eighth session of
+        /// 2026-12-05).
+        #[arg(long)]
+        part_memory: Option<f32>,
         /// Also write the graph of this frame index as GCG1 (to compare solvers).
         #[arg(long, requires = "graph_out")]
         dump_graph: Option<u64>,
@@ -473,6 +478,7 @@ fn segment(
     out: &Path,
     truth: Option<&PathBuf>,
     weights: Option<&[f32]>,
+    part_memory: Option<f32>,
     dump: Option<(u64, &PathBuf)>,
 ) -> anyhow::Result<()> {
     let suit = SuitDefinition::load_dir(suit_dir)?;
@@ -489,7 +495,14 @@ fn segment(
         }
         tables.weights = suitcap::segment::Weights::from_array(array);
     }
-    let mut segmenter = Segmenter::new(tables, &suit, SegmenterOptions::default());
+    let mut options = SegmenterOptions::default();
+    if let Some(nats) = part_memory {
+        if !(nats.is_finite() && nats >= 0.0) {
+            bail!("--part-memory: {nats} is not a finite number >= 0");
+        }
+        options.part_memory = nats;
+    }
+    let mut segmenter = Segmenter::new(tables, &suit, options);
     let names = output_names(input)?;
     let mut source = open_source(input, &SourceOptions::default())?;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -828,6 +841,7 @@ fn main() -> ExitCode {
             out,
             truth,
             weights,
+            part_memory,
             dump_graph,
             graph_out,
         } => segment(
@@ -836,6 +850,7 @@ fn main() -> ExitCode {
             out,
             truth.as_ref(),
             weights.as_deref(),
+            *part_memory,
             dump_graph.zip(graph_out.as_ref()),
         ),
     };

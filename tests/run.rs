@@ -1,5 +1,6 @@
 //! The runtime binary end to end with the shipped default suit: a generated clip in, a BVH take out,
-//! one BVH frame per input frame, readable again; and clear errors for a broken model.
+//! one BVH frame per input frame, readable again; `segment` with and without the head's memory; and
+//! clear errors for a broken model or setting.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -172,4 +173,40 @@ fn check_loads_the_trained_models() {
         "{part}"
     );
     assert!(!shipped.contains("not trained yet"), "{shipped}");
+}
+
+#[test]
+fn segment_masks_every_frame_with_or_without_the_heads_memory_and_rejects_a_bad_setting() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let data = generated_clip(&tmp.path().join("clip"));
+    let segment = |out: &Path, extra: &[&str]| {
+        suitcap()
+            .args(["segment", "--suit"])
+            .arg(repo("suits/default"))
+            .arg("--input")
+            .arg(data.join("frames"))
+            .arg("--truth")
+            .arg(data.join("masks"))
+            .arg("--out")
+            .arg(out)
+            .args(extra)
+            .output()
+            .expect("runs")
+    };
+    for (name, extra) in [
+        ("remembering", &[][..]),
+        ("plain", &["--part-memory", "0"][..]),
+    ] {
+        let out = tmp.path().join(name);
+        let report = succeeded(segment(&out, extra));
+        assert!(report.contains("IoU against"), "{report}");
+        let masks = std::fs::read_dir(&out).expect("masks written").count();
+        assert_eq!(masks, 12, "{name}");
+    }
+    let out = tmp.path().join("bad");
+    let output = segment(&out, &["--part-memory=-1"]);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("--part-memory"), "{stderr}");
+    assert!(!out.exists(), "nothing written for a bad setting");
 }
