@@ -25,6 +25,7 @@ use crate::body::{Body, Material, PartMesh, Subject, BASE_HEIGHT_CM};
 use crate::camera::Camera;
 use crate::mask::{bounding_box_of, Mask};
 use crate::raster::{draw_triangle, Cull, DepthBuffer, ScreenVertex};
+use crate::segment::Segmentation;
 use crate::skeleton::Skeleton;
 use crate::stats::median;
 
@@ -109,9 +110,9 @@ impl<'a> Silhouette<'a> {
     }
 }
 
-impl<'a> From<&'a crate::segment::Segmentation> for Silhouette<'a> {
+impl<'a> From<&'a Segmentation> for Silhouette<'a> {
     /// The segmenter's mask with its suit box.
-    fn from(segmentation: &'a crate::segment::Segmentation) -> Silhouette<'a> {
+    fn from(segmentation: &'a Segmentation) -> Silhouette<'a> {
         Silhouette {
             mask: &segmentation.mask,
             suit_box: segmentation.suit_box,

@@ -633,6 +633,17 @@ pub fn attach_parts_narrowing(
 mod tests {
     use super::*;
 
+    #[test]
+    fn add_parts_adds_only_what_is_new_and_counts_it() {
+        // Four pixels: the suit, a part already there, a new part, nothing.
+        let mut person = vec![true, true, false, false];
+        let mut part = vec![false, true, false, false];
+        let found = [false, true, true, false];
+        assert_eq!(add_parts(&mut person, &mut part, &found), 1);
+        assert_eq!(person, [true, true, true, false]);
+        assert_eq!(part, [false, true, true, false]);
+    }
+
     /// A rule with no marker pixels anywhere (so every piece passes the marker test).
     fn rule<'a>(score: &'a dyn Fn(usize) -> f32, min_area: usize, reach: f32) -> RegionRule<'a> {
         RegionRule {

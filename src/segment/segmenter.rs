@@ -128,7 +128,10 @@ pub struct SegmenterOptions {
     /// 1.5 nats 0.9389, 0.9391); at 1.5 the run over coffee +0.008, the palest subject over
     /// coffee +0.011, no rendering down by more than 0.0004 (docs/measurements.md, eighth
     /// session of 2026-12-05). Where the memory joins a head to background beside it into a
-    /// piece too large for a head (taken back whole), the pieces found without it are kept.
+    /// piece too large for a head (taken back whole), the pieces found without it are kept. It
+    /// can still carry background of a head's colour along for a few frames: on the five
+    /// sequences of `scripts/eval_segmenter.sh` it costs 0.0008 IoU on average (a star's halo
+    /// joined to a head for two frames, then both dropped in the third).
     pub part_memory: f32,
 }
 
