@@ -103,8 +103,8 @@ enum Command {
         #[arg(long, value_delimiter = ',')]
         weights: Option<Vec<f32>>,
         /// How many nats the part test leans towards the part where the previous frame attached
-        /// a head (default 1.5; 0 switches the memory off, as before the eighth session of
-        /// 2026-12-05).
+        /// a head or shoes (default 1.5; 0 switches the memory off, as before the eighth session
+        /// of 2026-12-05).
         #[arg(long)]
         part_memory: Option<f32>,
         /// Also write the graph of this frame index as GCG1 (to compare solvers).

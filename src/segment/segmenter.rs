@@ -29,7 +29,7 @@
 //!    [`SegmenterOptions::part_max_top_share`], [`SegmenterOptions::part_max_round_share`],
 //!    [`SegmenterOptions::part_min_depth`]); a head that the band joined to too much background
 //!    is looked for again within a narrower band ([`SegmenterOptions::part_reach_narrow`]); where
-//!    the previous frame attached a head, the part test leans towards the part
+//!    the previous frame attached a head or shoes, the part test leans towards the part
 //!    ([`SegmenterOptions::part_memory`]), so a head over a room of its colour is not lost every
 //!    other frame;
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
@@ -117,21 +117,23 @@ pub struct SegmenterOptions {
     /// 16 0.9358).
     pub off_cloth_max_markers: f32,
     /// Nats by which a band pixel's part test favours the part where the previous frame attached
-    /// a part above the suit's top row (a head) within [`PART_MEMORY_RADIUS`] cut pixels (0: no
-    /// memory). Where the room has a skin's colour (coffee, cat fur) the online background
-    /// makes a head likelier background than part in some frames and not in others; remembered,
-    /// the head found in one frame is kept in the next. Only the head: remembering hands and
-    /// shoes too kept background attached beside them (on the nine selection renderings and
-    /// three more of the palest subject, mean IoU 0.9374 without memory, 0.9373 / 0.9370 /
-    /// 0.9369 at 0.5 / 1 / 2 nats for every part; the drink's hand and can lost 0.02). Heads
-    /// only: 0.9389, **0.9391**, 0.9391, 0.9387 at 1, 1.5, 2, 3 nats (radius 2; radius 1 or 3 at
-    /// 1.5 nats 0.9389, 0.9391); at 1.5 the run over coffee +0.008, the palest subject over
-    /// coffee +0.011, no rendering down by more than 0.0004 (docs/measurements.md, eighth
-    /// session of 2026-12-05). Where the memory joins a head to background beside it into a
-    /// piece too large for a head (taken back whole), the pieces found without it are kept. It
-    /// can still carry background of a head's colour along for a few frames: on the five
-    /// sequences of `scripts/eval_segmenter.sh` it costs 0.0008 IoU on average (a star's halo
-    /// joined to a head for two frames, then both dropped in the third).
+    /// a part above the suit's top row or below its bottom row (a head, shoes, a hand raised or
+    /// lowered past them) within [`PART_MEMORY_RADIUS`] cut pixels (0: no memory). Where the
+    /// room has a skin's colour (coffee, cat fur) the online background makes a head likelier
+    /// background than part in some frames and not in others; remembered, the head found in one
+    /// frame is kept in the next. Not the parts beside the suit: remembering every part kept
+    /// background attached beside the hands (on the nine selection renderings and three more of
+    /// the palest subject, mean IoU 0.9374 without memory, 0.9373 / 0.9370 / 0.9369 at 0.5 / 1 /
+    /// 2 nats for every part; the drink's hand and can lost 0.02). Heads only: 0.9389,
+    /// **0.9391**, 0.9391, 0.9387 at 1, 1.5, 2, 3 nats (radius 2; radius 1 or 3 at 1.5 nats
+    /// 0.9389, 0.9391); at 1.5 the run over coffee +0.008, the palest subject over coffee
+    /// +0.011, no rendering down by more than 0.0004. Where the memory joins a head to
+    /// background beside it into a piece too large for a head (taken back whole), the pieces
+    /// found without it are kept (0.9392). The parts below the suit too: **0.9425** (bend 02_06
+    /// +0.026, the run over coffee +0.008, nothing down by more than 0.0001; docs/measurements.md,
+    /// eighth session of 2026-12-05). It can still carry background of a head's colour along for
+    /// a few frames (a star's halo joined to a head for two frames, then both dropped in the
+    /// third, in `scripts/eval_segmenter.sh`'s walk).
     pub part_memory: f32,
 }
 
@@ -246,8 +248,8 @@ pub struct Segmenter {
     band: Vec<bool>,
     narrow_band: Vec<bool>,
     part: Vec<bool>,
-    /// The previous frame's parts above the suit's top row grown by [`PART_MEMORY_RADIUS`]
-    /// (empty: none), and the row pass's scratch.
+    /// The previous frame's parts above and below the suit's rows grown by
+    /// [`PART_MEMORY_RADIUS`] (empty: none), and the row pass's scratch.
     previous_parts: Vec<bool>,
     grown_rows: Vec<bool>,
     /// The person and parts found without the memory, where the memory's pass took back a head.
@@ -727,13 +729,14 @@ impl Segmenter {
             attached.added += add_parts(&mut person, &mut self.part, plain_part);
         }
         if self.options.part_memory > 0.0 {
-            // The head: the parts above the suit's top row (none with nobody in the frame). On a
-            // stream's first frame, segmented twice, the second look remembers the first's.
-            let top = suit_bounds.map_or(0, |(_, y0, _, _)| y0);
-            grow_rows_into(
+            // The head and the shoes: the parts above the suit's top row and below its bottom row
+            // (none with nobody in the frame). On a stream's first frame, segmented twice, the
+            // second look remembers the first's.
+            let suit_rows = suit_bounds.map_or(0..0, |(_, y0, _, y1)| y0.min(h)..y1.min(h));
+            grow_beyond_rows_into(
                 &self.part,
                 (w, h),
-                top.min(h),
+                suit_rows,
                 PART_MEMORY_RADIUS,
                 &mut self.grown_rows,
                 &mut self.previous_parts,
@@ -929,19 +932,24 @@ fn mixed_3x3_in(labels: &[bool], w: usize, h: usize, b: PixelBox) -> Vec<bool> {
     mixed
 }
 
-/// `out` = the marks of the first `rows` rows of `marks` (`w` × `h`) grown by `radius` pixels
-/// (chessboard distance), as a row pass into `scratch` and a column pass.
-fn grow_rows_into(
+/// `out` = the marks of `marks` (`w` × `h`) outside the rows `inside` (those above and below
+/// it) grown by `radius` pixels (chessboard distance), as a row pass into `scratch` and a column
+/// pass.
+fn grow_beyond_rows_into(
     marks: &[bool],
     (w, h): (usize, usize),
-    rows: usize,
+    inside: std::ops::Range<usize>,
     radius: usize,
     scratch: &mut Vec<bool>,
     out: &mut Vec<bool>,
 ) {
+    let (top, bottom) = (
+        inside.start.min(h),
+        inside.end.clamp(inside.start.min(h), h),
+    );
     scratch.clear();
     scratch.resize(w * h, false);
-    for y in 0..rows.min(h) {
+    for y in (0..top).chain(bottom..h) {
         for x in (0..w).filter(|&x| marks[y * w + x]) {
             let (a, b) = (x.saturating_sub(radius), (x + radius + 1).min(w));
             scratch[y * w + a..y * w + b].fill(true);
@@ -949,7 +957,9 @@ fn grow_rows_into(
     }
     out.clear();
     out.resize(w * h, false);
-    for y in 0..(rows + radius).min(h) {
+    let near_top = 0..(top + radius).min(h);
+    let near_bottom = bottom.saturating_sub(radius).max(near_top.end)..h;
+    for y in near_top.chain(near_bottom) {
         let (a, b) = (y.saturating_sub(radius), (y + radius + 1).min(h));
         for x in 0..w {
             out[y * w + x] = (a..b).any(|yy| scratch[yy * w + x]);
@@ -966,18 +976,25 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_rows_above_grow_by_the_radius_and_the_rows_below_do_not_count() {
-        // 5 × 5, marks at (1, 0) and (3, 3); only the first two rows count, radius 1.
-        let mut marks = vec![false; 25];
+    fn the_marks_above_and_below_the_rows_grow_by_the_radius_and_those_inside_do_not_count() {
+        // 5 × 7, marks at (1, 0), (3, 3) and (4, 6); rows 2..5 are inside, radius 1.
+        let mut marks = vec![false; 35];
         marks[1] = true;
         marks[3 * 5 + 3] = true;
+        marks[6 * 5 + 4] = true;
         let (mut scratch, mut out) = (Vec::new(), Vec::new());
-        grow_rows_into(&marks, (5, 5), 2, 1, &mut scratch, &mut out);
+        grow_beyond_rows_into(&marks, (5, 7), 2..5, 1, &mut scratch, &mut out);
         let rows: Vec<String> = out
             .chunks(5)
             .map(|r| r.iter().map(|&v| if v { '#' } else { '.' }).collect())
             .collect();
-        assert_eq!(rows, ["###..", "###..", ".....", ".....", "....."]);
+        assert_eq!(
+            rows,
+            ["###..", "###..", ".....", ".....", ".....", "...##", "...##"]
+        );
+        // Nobody (no suit rows): every mark counts.
+        grow_beyond_rows_into(&marks, (5, 7), 0..0, 0, &mut scratch, &mut out);
+        assert_eq!(out, marks);
     }
 
     #[test]
