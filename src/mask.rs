@@ -147,6 +147,68 @@ fn any_set(row: &[bool]) -> bool {
     row.iter().fold(false, |any, &p| any | p)
 }
 
+/// Grows the set pixels of a row-major grid by a square: `out` becomes the `width × height`
+/// window at `(x0, y0)` of the grid (`grid_width × grid_height`), a pixel set where a set pixel of
+/// the grid lies within `radius` of it in x and in y (chessboard distance), grid pixels outside
+/// the window included and those beyond the grid's edges unset. Only the set pixels of the grid
+/// rows that `counts` accepts grow. Along the rows [`near_any`] into `scratch`, then across them an
+/// OR of the `2·radius + 1` rows around each: plain loops over bytes that the compiler vectorises.
+/// The HOG descriptor grows the person's mask with it, the segmenter the parts it remembers.
+#[allow(clippy::too_many_arguments)]
+pub fn grow_square_into(
+    pixels: &[bool],
+    (grid_width, grid_height): (usize, usize),
+    (x0, y0, width, height): (usize, usize, usize, usize),
+    radius: usize,
+    counts: impl Fn(usize) -> bool,
+    scratch: &mut Vec<bool>,
+    out: &mut Vec<bool>,
+) {
+    let r = radius;
+    // The grid rows that can reach the window, each reduced to the window's columns.
+    let rows = y0.saturating_sub(r)..(y0 + height + r).min(grid_height);
+    scratch.clear();
+    scratch.resize(rows.len() * width, false);
+    for (row, near) in rows.clone().zip(scratch.chunks_exact_mut(width.max(1))) {
+        if counts(row) {
+            let line = &pixels[row * grid_width..(row + 1) * grid_width];
+            near_any(line, x0, r, near);
+        }
+    }
+    // Window row j is set where any of the reduced rows within r of it is.
+    out.clear();
+    out.resize(width * height, false);
+    for (j, grown) in out.chunks_exact_mut(width.max(1)).enumerate() {
+        let y = y0 + j;
+        let reach = y.saturating_sub(r).max(rows.start)..(y + r + 1).min(rows.end);
+        for k in reach {
+            let near = &scratch[(k - rows.start) * width..][..width];
+            for (g, &n) in grown.iter_mut().zip(near) {
+                *g |= n;
+            }
+        }
+    }
+}
+
+/// `out[i]` = is any of `line[from + i − r ..= from + i + r]` (clipped to the line) set: an OR of
+/// the `2r + 1` shifted runs of the line, each a plain loop over bytes that the compiler vectorises.
+pub fn near_any(line: &[bool], from: usize, r: usize, out: &mut [bool]) {
+    out.fill(false);
+    let n = out.len();
+    for d in 0..=2 * r {
+        // out[i] |= line[from + d + i − r], for the i where that pixel exists.
+        let offset = from + d;
+        let lo = r.saturating_sub(offset);
+        let hi = (line.len() + r).saturating_sub(offset).min(n);
+        if lo < hi {
+            let shifted = &line[offset + lo - r..offset + hi - r];
+            for (o, &p) in out[lo..hi].iter_mut().zip(shifted) {
+                *o |= p;
+            }
+        }
+    }
+}
+
 /// How a mask agrees with the true one, in pixels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Agreement {
@@ -181,6 +243,95 @@ mod tests {
     use super::*;
 
     #[test]
+    fn near_any_marks_the_pixels_within_r_of_a_set_one() {
+        let line = [false, false, false, true, false, false, false, false];
+        let mut out = [false; 8];
+        near_any(&line, 0, 2, &mut out);
+        assert_eq!(out.map(u8::from), [0, 1, 1, 1, 1, 1, 0, 0]);
+        // A window of the line starting at 4: pixels 4..8.
+        let mut out = [false; 4];
+        near_any(&line, 4, 2, &mut out);
+        assert_eq!(out.map(u8::from), [1, 1, 0, 0]);
+        // Set at both ends, r = 1, clipped at the line's ends.
+        let line = [true, false, false, false, true];
+        let mut out = [false; 5];
+        near_any(&line, 0, 1, &mut out);
+        assert_eq!(out.map(u8::from), [1, 1, 0, 1, 1]);
+        near_any(&line, 0, 0, &mut out);
+        assert_eq!(out.map(u8::from), [1, 0, 0, 0, 1]);
+    }
+
+    /// `grow_square_into` over a whole `w × h` grid, every row counted.
+    fn grown(
+        pixels: &[bool],
+        (w, h): (usize, usize),
+        window: (usize, usize, usize, usize),
+        r: usize,
+    ) -> Vec<u8> {
+        let (mut scratch, mut out) = (Vec::new(), Vec::new());
+        grow_square_into(pixels, (w, h), window, r, |_| true, &mut scratch, &mut out);
+        out.into_iter().map(u8::from).collect()
+    }
+
+    #[test]
+    fn a_pixel_grows_into_a_square() {
+        let mut pixels = vec![false; 7 * 7];
+        pixels[3 * 7 + 3] = true;
+        let all = grown(&pixels, (7, 7), (0, 0, 7, 7), 2);
+        for y in 0..7 {
+            for x in 0..7 {
+                let inside = (1..=5).contains(&x) && (1..=5).contains(&y);
+                assert_eq!(all[y * 7 + x], u8::from(inside), "({x}, {y})");
+            }
+        }
+        // A window that does not hold the pixel still sees its neighbourhood: of the 3×3 window at
+        // (4, 4), only the corner (4, 4) … (5, 5) lies within 2 of (3, 3).
+        assert_eq!(
+            grown(&pixels, (7, 7), (4, 4, 3, 3), 2),
+            [1, 1, 0, 1, 1, 0, 0, 0, 0]
+        );
+    }
+
+    #[test]
+    fn only_the_counted_rows_grow() {
+        // 5 × 7, pixels at (1, 0), (3, 3) and (4, 6); rows 2..5 do not count, radius 1.
+        let mut pixels = vec![false; 35];
+        pixels[1] = true;
+        pixels[3 * 5 + 3] = true;
+        pixels[6 * 5 + 4] = true;
+        let (mut scratch, mut out) = (Vec::new(), Vec::new());
+        let beyond = |y: usize| !(2..5).contains(&y);
+        grow_square_into(
+            &pixels,
+            (5, 7),
+            (0, 0, 5, 7),
+            1,
+            beyond,
+            &mut scratch,
+            &mut out,
+        );
+        let rows: Vec<String> = out
+            .chunks(5)
+            .map(|r| r.iter().map(|&v| if v { '#' } else { '.' }).collect())
+            .collect();
+        assert_eq!(
+            rows,
+            ["###..", "###..", ".....", ".....", ".....", "...##", "...##"]
+        );
+        // Radius 0, every row counted: the pixels themselves.
+        grow_square_into(
+            &pixels,
+            (5, 7),
+            (0, 0, 5, 7),
+            0,
+            |_| true,
+            &mut scratch,
+            &mut out,
+        );
+        assert_eq!(out, pixels);
+    }
+
+    #[test]
     fn from_fn_is_row_major() {
         let mask = Mask::from_fn(3, 2, |x, y| x == y);
         assert_eq!(mask.pixels(), &[true, false, false, false, true, false]);
@@ -209,6 +360,24 @@ mod tests {
     }
 
     proptest::proptest! {
+
+        #[test]
+        fn near_any_is_the_or_over_the_window(
+            line in proptest::collection::vec(proptest::prelude::any::<bool>(), 1..40),
+            from_share in 0.0f64..1.0,
+            len_share in 0.0f64..1.0,
+            r in 0usize..4,
+        ) {
+            let from = (from_share * line.len() as f64) as usize;
+            let len = (len_share * (line.len() - from) as f64) as usize;
+            let mut out = vec![false; len];
+            near_any(&line, from, r, &mut out);
+            for (i, &o) in out.iter().enumerate() {
+                let x = from + i;
+                let expected = line[x.saturating_sub(r)..(x + r + 1).min(line.len())].contains(&true);
+                proptest::prop_assert_eq!(o, expected, "i = {}", i);
+            }
+        }
         /// The box is the extent of the set pixels, whatever the grid's width (the row ORs run
         /// over rows shorter and longer than a vector register).
         #[test]

@@ -53,7 +53,7 @@
 use image::RgbImage;
 use std::f32::consts::{FRAC_PI_2, PI};
 
-use crate::mask::Mask;
+use crate::mask::{grow_square_into, Mask};
 
 /// Blocks per side of the grid laid over the bounding box.
 pub const HOG_GRID: usize = 16;
@@ -135,7 +135,23 @@ fn histograms(
     let grey = grey_patch(frame, cx0, cy0, cw, ch);
     let col_block: Vec<usize> = (cx0..cx1).map(|x| block_index(x - x0, x1 - x0)).collect();
     let row_block: Vec<usize> = (cy0..cy1).map(|y| block_index(y - y0, y1 - y0)).collect();
-    let support = support.map(|(mask, radius)| grown_mask_window(mask, (cx0, cy0, cw, ch), radius));
+    // Which pixels of the box lie within the radius of the person (mask pixels beyond the box
+    // included).
+    let support = support.map(|(mask, radius)| {
+        let (mut near_in_row, mut grown) = (Vec::new(), Vec::new());
+        let grid = (mask.width() as usize, mask.height() as usize);
+        let window = (cx0 as usize, cy0 as usize, cw, ch);
+        grow_square_into(
+            mask.pixels(),
+            grid,
+            window,
+            radius as usize,
+            |_| true,
+            &mut near_in_row,
+            &mut grown,
+        );
+        grown
+    });
 
     // Row scratch, allocated once per call: gradients, magnitudes and bin positions.
     let pw = cw + 2;
@@ -189,63 +205,6 @@ fn histograms(
         normalise_block(histogram, HOG_EPSILON_PER_PIXEL * pixels as f32);
     }
     out
-}
-
-/// Which pixels of the window `(x0, y0, width, height)` of `mask` lie within `radius` pixels in x and
-/// in y (a square neighbourhood) of a set mask pixel, mask pixels outside the window included;
-/// `width × height` values, row-major; pixels beyond the mask's edges are not the person. Along the
-/// rows [`near_any`], then across them an OR of the `2·radius + 1` rows around each.
-fn grown_mask_window(
-    mask: &Mask,
-    (x0, y0, width, height): (u32, u32, usize, usize),
-    radius: u32,
-) -> Vec<bool> {
-    let (mask_width, mask_height) = (mask.width() as usize, mask.height() as usize);
-    let (x0, y0, r) = (x0 as usize, y0 as usize, radius as usize);
-    let pixels = mask.pixels();
-    // The mask rows that can reach the window, each reduced to the window's columns.
-    let rows = y0.saturating_sub(r)..(y0 + height + r).min(mask_height);
-    let mut near_in_row = vec![false; rows.len() * width];
-    for (row, out) in rows.clone().zip(near_in_row.chunks_exact_mut(width.max(1))) {
-        near_any(
-            &pixels[row * mask_width..(row + 1) * mask_width],
-            x0,
-            r,
-            out,
-        );
-    }
-    // Then row by row: window row j is near the mask where any of the reduced rows within r is.
-    let mut grown = vec![false; width * height];
-    for (j, out) in grown.chunks_exact_mut(width.max(1)).enumerate() {
-        let y = y0 + j;
-        let reach = y.saturating_sub(r).max(rows.start)..(y + r + 1).min(rows.end);
-        for k in reach {
-            let near = &near_in_row[(k - rows.start) * width..][..width];
-            for (o, &n) in out.iter_mut().zip(near) {
-                *o |= n;
-            }
-        }
-    }
-    grown
-}
-
-/// `out[i]` = is any of `line[from + i − r ..= from + i + r]` (clipped to the line) set: an OR of
-/// the `2r + 1` shifted runs of the line, each a plain loop over bytes that the compiler vectorises.
-fn near_any(line: &[bool], from: usize, r: usize, out: &mut [bool]) {
-    out.fill(false);
-    let n = out.len();
-    for d in 0..=2 * r {
-        // out[i] |= line[from + d + i − r], for the i where that pixel exists.
-        let offset = from + d;
-        let lo = r.saturating_sub(offset);
-        let hi = (line.len() + r).saturating_sub(offset).min(n);
-        if lo < hi {
-            let shifted = &line[offset + lo - r..offset + hi - r];
-            for (o, &p) in out[lo..hi].iter_mut().zip(shifted) {
-                *o |= p;
-            }
-        }
-    }
 }
 
 /// `v ← v / sqrt(|v|² + ε²)`; an all-zero block stays zero.
@@ -572,46 +531,6 @@ mod tests {
     }
 
     #[test]
-    fn near_any_marks_the_pixels_within_r_of_a_set_one() {
-        let line = [false, false, false, true, false, false, false, false];
-        let mut out = [false; 8];
-        near_any(&line, 0, 2, &mut out);
-        assert_eq!(out.map(u8::from), [0, 1, 1, 1, 1, 1, 0, 0]);
-        // A window of the line starting at 4: pixels 4..8.
-        let mut out = [false; 4];
-        near_any(&line, 4, 2, &mut out);
-        assert_eq!(out.map(u8::from), [1, 1, 0, 0]);
-        // Set at both ends, r = 1, clipped at the line's ends.
-        let line = [true, false, false, false, true];
-        let mut out = [false; 5];
-        near_any(&line, 0, 1, &mut out);
-        assert_eq!(out.map(u8::from), [1, 1, 0, 1, 1]);
-        near_any(&line, 0, 0, &mut out);
-        assert_eq!(out.map(u8::from), [1, 0, 0, 0, 1]);
-    }
-
-    #[test]
-    fn a_mask_pixel_grows_into_a_square() {
-        let mut pixels = vec![false; 7 * 7];
-        pixels[3 * 7 + 3] = true;
-        let mask = Mask::from_pixels(7, 7, pixels).expect("7×7");
-        let grown = grown_mask_window(&mask, (0, 0, 7, 7), 2);
-        for y in 0..7 {
-            for x in 0..7 {
-                let inside = (1..=5).contains(&x) && (1..=5).contains(&y);
-                assert_eq!(grown[y * 7 + x], inside, "({x}, {y})");
-            }
-        }
-        // A window that does not hold the pixel still sees its neighbourhood: of the 3×3 window at
-        // (4, 4), only the corner (4, 4) … (5, 5) lies within 2 of (3, 3).
-        let grown = grown_mask_window(&mask, (4, 4, 3, 3), 2);
-        assert_eq!(
-            grown.iter().map(|&g| u8::from(g)).collect::<Vec<_>>(),
-            [1, 1, 0, 1, 1, 0, 0, 0, 0]
-        );
-    }
-
-    #[test]
     fn background_away_from_the_person_changes_nothing() {
         // The person: a 20×30 rectangle at (20, 10) of a 64×48 noise frame.
         let (w, h) = (64u32, 48u32);
@@ -717,24 +636,6 @@ mod tests {
     }
 
     proptest! {
-        #[test]
-        fn near_any_is_the_or_over_the_window(
-            line in proptest::collection::vec(any::<bool>(), 1..40),
-            from_share in 0.0f64..1.0,
-            len_share in 0.0f64..1.0,
-            r in 0usize..4,
-        ) {
-            let from = (from_share * line.len() as f64) as usize;
-            let len = (len_share * (line.len() - from) as f64) as usize;
-            let mut out = vec![false; len];
-            near_any(&line, from, r, &mut out);
-            for (i, &o) in out.iter().enumerate() {
-                let x = from + i;
-                let expected = line[x.saturating_sub(r)..(x + r + 1).min(line.len())].contains(&true);
-                prop_assert_eq!(o, expected, "i = {}", i);
-            }
-        }
-
         #[test]
         fn every_non_empty_block_has_unit_norm(
             (w, h, pixels) in (1u32..40, 1u32..40).prop_flat_map(|(w, h)| {

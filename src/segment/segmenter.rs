@@ -56,7 +56,7 @@ use super::features::{
 use super::maxflow::{GridGraph, GridMaxFlow};
 use super::snap::snap_to_colour_edges;
 use super::tables::SegmenterTables;
-use crate::mask::{bounding_box_of, Mask};
+use crate::mask::{bounding_box_of, grow_square_into, Mask};
 use crate::suit::SuitDefinition;
 
 /// Tuning of the clean-up and the boundary refinement.
@@ -733,11 +733,12 @@ impl Segmenter {
             // (none with nobody in the frame). On a stream's first frame, segmented twice, the
             // second look remembers the first's.
             let suit_rows = suit_bounds.map_or(0..0, |(_, y0, _, y1)| y0.min(h)..y1.min(h));
-            grow_beyond_rows_into(
+            grow_square_into(
                 &self.part,
                 (w, h),
-                suit_rows,
+                (0, 0, w, h),
                 PART_MEMORY_RADIUS,
+                |y| !suit_rows.contains(&y),
                 &mut self.grown_rows,
                 &mut self.previous_parts,
             );
@@ -932,41 +933,6 @@ fn mixed_3x3_in(labels: &[bool], w: usize, h: usize, b: PixelBox) -> Vec<bool> {
     mixed
 }
 
-/// `out` = the marks of `marks` (`w` × `h`) outside the rows `inside` (those above and below
-/// it) grown by `radius` pixels (chessboard distance), as a row pass into `scratch` and a column
-/// pass.
-fn grow_beyond_rows_into(
-    marks: &[bool],
-    (w, h): (usize, usize),
-    inside: std::ops::Range<usize>,
-    radius: usize,
-    scratch: &mut Vec<bool>,
-    out: &mut Vec<bool>,
-) {
-    let (top, bottom) = (
-        inside.start.min(h),
-        inside.end.clamp(inside.start.min(h), h),
-    );
-    scratch.clear();
-    scratch.resize(w * h, false);
-    for y in (0..top).chain(bottom..h) {
-        for x in (0..w).filter(|&x| marks[y * w + x]) {
-            let (a, b) = (x.saturating_sub(radius), (x + radius + 1).min(w));
-            scratch[y * w + a..y * w + b].fill(true);
-        }
-    }
-    out.clear();
-    out.resize(w * h, false);
-    let near_top = 0..(top + radius).min(h);
-    let near_bottom = bottom.saturating_sub(radius).max(near_top.end)..h;
-    for y in near_top.chain(near_bottom) {
-        let (a, b) = (y.saturating_sub(radius), (y + radius + 1).min(h));
-        for x in 0..w {
-            out[y * w + x] = (a..b).any(|yy| scratch[yy * w + x]);
-        }
-    }
-}
-
 fn ms(started: Instant) -> f64 {
     started.elapsed().as_secs_f64() * 1e3
 }
@@ -974,28 +940,6 @@ fn ms(started: Instant) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_marks_above_and_below_the_rows_grow_by_the_radius_and_those_inside_do_not_count() {
-        // 5 × 7, marks at (1, 0), (3, 3) and (4, 6); rows 2..5 are inside, radius 1.
-        let mut marks = vec![false; 35];
-        marks[1] = true;
-        marks[3 * 5 + 3] = true;
-        marks[6 * 5 + 4] = true;
-        let (mut scratch, mut out) = (Vec::new(), Vec::new());
-        grow_beyond_rows_into(&marks, (5, 7), 2..5, 1, &mut scratch, &mut out);
-        let rows: Vec<String> = out
-            .chunks(5)
-            .map(|r| r.iter().map(|&v| if v { '#' } else { '.' }).collect())
-            .collect();
-        assert_eq!(
-            rows,
-            ["###..", "###..", ".....", ".....", ".....", "...##", "...##"]
-        );
-        // Nobody (no suit rows): every mark counts.
-        grow_beyond_rows_into(&marks, (5, 7), 0..0, 0, &mut scratch, &mut out);
-        assert_eq!(out, marks);
-    }
 
     #[test]
     fn mixed_3x3_marks_both_sides_of_a_label_edge() {
