@@ -176,7 +176,8 @@ fn check_loads_the_trained_models() {
 }
 
 #[test]
-fn segment_masks_every_frame_with_or_without_the_heads_memory_and_rejects_a_bad_setting() {
+fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rejects_bad_settings()
+{
     let tmp = tempfile::tempdir().expect("tempdir");
     let data = generated_clip(&tmp.path().join("clip"));
     let segment = |out: &Path, extra: &[&str]| {
@@ -196,6 +197,7 @@ fn segment_masks_every_frame_with_or_without_the_heads_memory_and_rejects_a_bad_
     for (name, extra) in [
         ("remembering", &[][..]),
         ("plain", &["--part-memory", "0"][..]),
+        ("trained colours", &["--part-colours", "0"][..]),
     ] {
         let out = tmp.path().join(name);
         let report = succeeded(segment(&out, extra));
@@ -208,5 +210,10 @@ fn segment_masks_every_frame_with_or_without_the_heads_memory_and_rejects_a_bad_
     assert!(!output.status.success());
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("--part-memory"), "{stderr}");
+    assert!(!out.exists(), "nothing written for a bad setting");
+    let output = segment(&out, &["--part-colours", "1.5"]);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("--part-colours"), "{stderr}");
     assert!(!out.exists(), "nothing written for a bad setting");
 }

@@ -31,7 +31,9 @@
 //!    is looked for again within a narrower band ([`SegmenterOptions::part_reach_narrow`]); where
 //!    the previous frame attached a head or shoes, the part test leans towards the part
 //!    ([`SegmenterOptions::part_memory`]), so a head over a room of its colour is not lost every
-//!    other frame;
+//!    other frame; and the part test's colours mix the trained table (every training subject's
+//!    skin and shoes) with this person's own, learned from the heads and shoes attached in the
+//!    frames before ([`SegmenterOptions::part_colour_share`]);
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut; then moves the outline onto the frame's colour edge
 //!    ([`snap`](super::snap); its time is counted in the refinement's).
@@ -135,6 +137,21 @@ pub struct SegmenterOptions {
     /// a few frames (a star's halo joined to a head for two frames, then both dropped in the
     /// third, in `scripts/eval_segmenter.sh`'s walk).
     pub part_memory: f32,
+    /// Share of the person's own head and shoe colours in the part test's colour likelihood (0:
+    /// the trained part table alone, as before the ninth session of 2026-12-05). The trained
+    /// table holds every training subject's skin, hair and shoes, so a background of any skin's
+    /// colour passes it (cat fur beside a pale head, bricks beside a walker's hands); mixed with
+    /// a histogram of the colours attached above and below the suit's rows in the frames before
+    /// (learned like the room's, [`SegmenterOptions::part_colour_rate`]), the test leans towards
+    /// this person's colours. Chosen with `suitcap segment --truth` on the nine selection
+    /// renderings and three of the palest subject (mean IoU 0.9425 without): shares 0.2 / 0.3 /
+    /// 0.45 / 0.6 at rate 0.3 gave 0.9449 / **0.9473** / 0.9474 / 0.9473, rates 0.15 / 0.6 at
+    /// share 0.3 0.9474 / 0.9473 (the drink's hand and can +0.023, the run over coffee +0.016,
+    /// the bend −0.008); learned from every attached part (hands too), 0.9422–0.9439 (the
+    /// drink's can learned as a hand's colour). docs/measurements.md, ninth session.
+    pub part_colour_share: f32,
+    /// Share of the online part-colour histogram that each frame's head and shoes replace.
+    pub part_colour_rate: f32,
 }
 
 /// How far (cut pixels, chessboard) the previous frame's parts reach for
@@ -167,6 +184,8 @@ impl Default for SegmenterOptions {
             part_min_depth: 0.03,
             off_cloth_max_markers: 4.0,
             part_memory: 1.5,
+            part_colour_share: 0.3,
+            part_colour_rate: 0.3,
         }
     }
 }
@@ -236,6 +255,12 @@ pub struct Segmenter {
     unary_tables: UnaryTables,
     /// Online background colour histogram over colour bins (sums to 1 once it exists).
     online_background: Option<Vec<f32>>,
+    /// Online histogram of the person's head and shoe colours over colour bins (sums to 1 once it
+    /// exists; [`SegmenterOptions::part_colour_share`]).
+    online_part: Option<Vec<f32>>,
+    /// Part colour NLL per colour bin used for the current frame: the trained table mixed with
+    /// `online_part`.
+    part_bin: Vec<f32>,
     /// Background colour NLL per joint colour × pattern index used for the current frame.
     background_colour: Vec<f32>,
     /// p(pattern class | background) of the trained table.
@@ -263,6 +288,27 @@ pub struct Segmenter {
 }
 
 /// −ln Σ_class p(class · COLOUR_BINS + bin) of a joint colour × pattern NLL table.
+/// Blends this frame's normalised `histogram` into the running one, `(1 − rate)·old + rate·new`
+/// (the first frame's alone when there is none yet), and returns it.
+fn blend_online(online: &mut Option<Vec<f32>>, histogram: Vec<f32>, rate: f32) -> &[f32] {
+    match online {
+        Some(old) => {
+            for (o, n) in old.iter_mut().zip(&histogram) {
+                *o = (1.0 - rate) * *o + rate * n;
+            }
+        }
+        None => *online = Some(histogram),
+    }
+    online.as_deref().unwrap_or_default()
+}
+
+/// `−ln((1 − share)·e^(−trained_nll) + online_part)`, a probability floored at 1e-6: a trained
+/// table's entry mixed with an online histogram's (`online_part`: its value times `share`).
+fn mixed_nll(trained_nll: f32, share: f32, online_part: f32) -> f32 {
+    let p = (1.0 - share) * (-trained_nll).exp() + online_part;
+    -(p.max(1e-6)).ln()
+}
+
 fn marginal_nll(joint: &[f32]) -> Vec<f32> {
     (0..COLOUR_BINS)
         .map(|bin| {
@@ -335,6 +381,7 @@ impl Segmenter {
                 .sum::<f32>()
         });
         let background_colour = tables.colour[0].clone();
+        let part_bin = tables.part.clone();
         let trained_background_bin = marginal_nll(&tables.colour[0]);
         let background_bin = trained_background_bin.clone();
         let unary_tables = UnaryTables::new(&tables);
@@ -355,6 +402,8 @@ impl Segmenter {
             crop: Vec::new(),
             unary_tables,
             online_background: None,
+            online_part: None,
+            part_bin,
             background_colour,
             background_pattern,
             background_bin,
@@ -383,6 +432,8 @@ impl Segmenter {
         self.before_previous_mask = None;
         self.previous_parts.clear();
         self.online_background = None;
+        self.online_part = None;
+        self.part_bin.clone_from(&self.tables.part);
         self.background_colour.clone_from(&self.tables.colour[0]);
         self.background_bin.clone_from(&self.trained_background_bin);
     }
@@ -419,15 +470,7 @@ impl Segmenter {
             return;
         }
         histogram.iter_mut().for_each(|v| *v /= total);
-        let online = match self.online_background.take() {
-            Some(mut old) => {
-                for (o_v, n) in old.iter_mut().zip(&histogram) {
-                    *o_v = (1.0 - o.adapt_rate) * *o_v + o.adapt_rate * n;
-                }
-                old
-            }
-            None => histogram,
-        };
+        let online = blend_online(&mut self.online_background, histogram, o.adapt_rate);
         // p_bg(colour, pattern) = (1 − s)·trained + s·online(colour)·p_trained(pattern | bg).
         let share = o.adapt_share;
         for class in 0..PATTERN_CLASSES {
@@ -435,18 +478,42 @@ impl Segmenter {
             #[allow(clippy::needless_range_loop)]
             for bin in 0..COLOUR_BINS {
                 let k = class * COLOUR_BINS + bin;
-                let trained = (-self.tables.colour[0][k]).exp();
-                let p =
-                    (1.0 - share) * trained + share * online[bin] * self.background_pattern[class];
-                self.background_colour[k] = -(p.max(1e-6)).ln();
+                let online_part = share * online[bin] * self.background_pattern[class];
+                self.background_colour[k] = mixed_nll(self.tables.colour[0][k], share, online_part);
             }
         }
         let trained = &self.trained_background_bin;
         for (bin, v) in self.background_bin.iter_mut().enumerate() {
-            let p = (1.0 - share) * (-trained[bin]).exp() + share * online[bin];
-            *v = -(p.max(1e-6)).ln();
+            *v = mixed_nll(trained[bin], share, share * online[bin]);
         }
-        self.online_background = Some(online);
+    }
+
+    /// Learns the person's head and shoe colours from this frame's parts above and below the
+    /// suit's rows (`suit_rows`, cut rows; every part with nobody's suit found) and refreshes the
+    /// part colour likelihood for the rest of this frame and the next
+    /// ([`SegmenterOptions::part_colour_share`]).
+    fn adapt_part_colours(&mut self, w: usize, suit_rows: std::ops::Range<usize>) {
+        let o = self.options;
+        if o.part_colour_share <= 0.0 || w == 0 {
+            return;
+        }
+        let mut histogram = vec![0.0f32; COLOUR_BINS];
+        let mut total = 0.0f32;
+        for (i, _) in self.part.iter().enumerate().filter(|(_, &p)| p) {
+            if !suit_rows.contains(&(i / w)) {
+                histogram[self.features.colour[i].bin as usize] += 1.0;
+                total += 1.0;
+            }
+        }
+        if total < 1.0 {
+            return;
+        }
+        histogram.iter_mut().for_each(|v| *v /= total);
+        let online = blend_online(&mut self.online_part, histogram, o.part_colour_rate);
+        for (bin, v) in self.part_bin.iter_mut().enumerate() {
+            let share = o.part_colour_share;
+            *v = mixed_nll(self.tables.part[bin], share, share * online[bin]);
+        }
     }
 
     /// Builds the frame's graph (without cutting it); the graph is then available from [`Segmenter::graph`].
@@ -670,11 +737,7 @@ impl Segmenter {
             (&mut self.band, &mut self.narrow_band),
         );
         let sigma = self.tables.weights.colour;
-        let (part_nll, prior, bg) = (
-            &self.tables.part,
-            self.tables.part_prior,
-            &self.background_bin,
-        );
+        let (part_nll, prior, bg) = (&self.part_bin, self.tables.part_prior, &self.background_bin);
         let suit_area = labels.iter().filter(|&&l| l).count() as f32;
         let memory = if self.previous_parts.len() == w * h {
             self.options.part_memory
@@ -728,11 +791,11 @@ impl Segmenter {
             );
             attached.added += add_parts(&mut person, &mut self.part, plain_part);
         }
+        // The head and the shoes: the parts above the suit's top row and below its bottom row
+        // (none with nobody in the frame). On a stream's first frame, segmented twice, the second
+        // look remembers the first's.
+        let suit_rows = suit_bounds.map_or(0..0, |(_, y0, _, y1)| y0.min(h)..y1.min(h));
         if self.options.part_memory > 0.0 {
-            // The head and the shoes: the parts above the suit's top row and below its bottom row
-            // (none with nobody in the frame). On a stream's first frame, segmented twice, the
-            // second look remembers the first's.
-            let suit_rows = suit_bounds.map_or(0..0, |(_, y0, _, y1)| y0.min(h)..y1.min(h));
             grow_square_into(
                 &self.part,
                 (w, h),
@@ -743,6 +806,7 @@ impl Segmenter {
                 &mut self.previous_parts,
             );
         }
+        self.adapt_part_colours(w, suit_rows);
         if attached.added > 0 {
             let filled = clean(&mut person, w, h, None, max_hole, &mut crop, &mut ids);
             report.holes_filled += filled.holes_filled;
@@ -881,7 +945,7 @@ impl Segmenter {
                         let k = colour_index(c, self.pattern_at(near));
                         let suit = sigma * self.tables.colour[1][k];
                         let fg = if self.part.get(near).copied().unwrap_or(false) {
-                            suit.min(sigma * self.tables.part[c.bin as usize])
+                            suit.min(sigma * self.part_bin[c.bin as usize])
                         } else {
                             suit
                         };
@@ -940,6 +1004,29 @@ fn ms(started: Instant) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_first_histogram_is_taken_whole_and_later_ones_blended_at_the_rate() {
+        let mut online = None;
+        assert_eq!(blend_online(&mut online, vec![1.0, 0.0], 0.25), [1.0, 0.0]);
+        // 0.75 · (1, 0) + 0.25 · (0, 1).
+        assert_eq!(
+            blend_online(&mut online, vec![0.0, 1.0], 0.25),
+            [0.75, 0.25]
+        );
+        assert_eq!(online, Some(vec![0.75, 0.25]));
+    }
+
+    #[test]
+    fn a_trained_entry_mixes_with_the_online_share_of_the_probability() {
+        // Share 0: the trained NLL itself; share 1: −ln of the online part alone.
+        assert!((mixed_nll(2.0, 0.0, 0.0) - 2.0).abs() < 1e-6);
+        assert!((mixed_nll(2.0, 1.0, 0.5) - 2.0f32.ln()).abs() < 1e-6);
+        // Half of e^0 = 1 and half of 0.5 of the online: p = 0.5 + 0.25 = 0.75.
+        assert!((mixed_nll(0.0, 0.5, 0.25) + 0.75f32.ln()).abs() < 1e-6);
+        // Nothing in either: the floor, 1e-6.
+        assert!((mixed_nll(f32::INFINITY, 0.5, 0.0) + 1e-6f32.ln()).abs() < 1e-3);
+    }
 
     #[test]
     fn mixed_3x3_marks_both_sides_of_a_label_edge() {
