@@ -287,7 +287,6 @@ pub struct Segmenter {
     marker_side_share: f32,
 }
 
-/// −ln Σ_class p(class · COLOUR_BINS + bin) of a joint colour × pattern NLL table.
 /// Blends this frame's normalised `histogram` into the running one, `(1 − rate)·old + rate·new`
 /// (the first frame's alone when there is none yet), and returns it.
 fn blend_online(online: &mut Option<Vec<f32>>, histogram: Vec<f32>, rate: f32) -> &[f32] {
@@ -309,6 +308,7 @@ fn mixed_nll(trained_nll: f32, share: f32, online_part: f32) -> f32 {
     -(p.max(1e-6)).ln()
 }
 
+/// −ln Σ_class p(class · COLOUR_BINS + bin) of a joint colour × pattern NLL table.
 fn marginal_nll(joint: &[f32]) -> Vec<f32> {
     (0..COLOUR_BINS)
         .map(|bin| {
@@ -489,8 +489,8 @@ impl Segmenter {
     }
 
     /// Learns the person's head and shoe colours from this frame's parts above and below the
-    /// suit's rows (`suit_rows`, cut rows; every part with nobody's suit found) and refreshes the
-    /// part colour likelihood for the rest of this frame and the next
+    /// suit's rows (`suit_rows`, cut rows) and refreshes the part colour likelihood for the rest of
+    /// this frame (the refinement) and the next
     /// ([`SegmenterOptions::part_colour_share`]).
     fn adapt_part_colours(&mut self, w: usize, suit_rows: std::ops::Range<usize>) {
         let o = self.options;
