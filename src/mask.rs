@@ -2,7 +2,9 @@
 //!
 //! A [`Mask`] is a width × height grid of booleans (`true` = person). It converts to and from 8-bit grey
 //! images (255 = person; any value ≥ 128 reads as person) and measures its agreement with another mask
-//! by intersection over union.
+//! by intersection over union. Beside it, the helpers over plain row-major `bool` grids that the
+//! stages share: the box around the set pixels ([`bounding_box_of`]) and a square growth
+//! ([`grow_square_into`]).
 
 use image::GrayImage;
 
@@ -154,7 +156,6 @@ fn any_set(row: &[bool]) -> bool {
 /// rows that `counts` accepts grow. Along the rows [`near_any`] into `scratch`, then across them an
 /// OR of the `2·radius + 1` rows around each: plain loops over bytes that the compiler vectorises.
 /// The HOG descriptor grows the person's mask with it, the segmenter the parts it remembers.
-#[allow(clippy::too_many_arguments)]
 pub fn grow_square_into(
     pixels: &[bool],
     (grid_width, grid_height): (usize, usize),
