@@ -1,6 +1,6 @@
 //! The runtime binary end to end with the shipped default suit: a generated clip in, a BVH take out,
-//! one BVH frame per input frame, readable again; `segment` with and without the head's memory; and
-//! clear errors for a broken model or setting.
+//! one BVH frame per input frame, readable again; `segment` with and without the part memory and the
+//! person's part colours; and clear errors for a broken model or setting.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

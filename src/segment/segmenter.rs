@@ -291,6 +291,39 @@ pub struct Segmenter {
     marker_side_share: f32,
 }
 
+/// Pixel counts over the colour bins, from which the online background and part colours are
+/// learned.
+struct BinHistogram {
+    counts: Vec<f32>,
+    total: f32,
+}
+
+impl BinHistogram {
+    fn new() -> BinHistogram {
+        BinHistogram {
+            counts: vec![0.0; COLOUR_BINS],
+            total: 0.0,
+        }
+    }
+
+    /// Counts one pixel of colour bin `bin`.
+    #[inline]
+    fn add(&mut self, bin: u16) {
+        self.counts[bin as usize] += 1.0;
+        self.total += 1.0;
+    }
+
+    /// The counts as shares summing to 1; `None` when no pixel was counted.
+    fn normalised(mut self) -> Option<Vec<f32>> {
+        if self.total < 1.0 {
+            return None;
+        }
+        let total = self.total;
+        self.counts.iter_mut().for_each(|v| *v /= total);
+        Some(self.counts)
+    }
+}
+
 /// Blends this frame's normalised `histogram` into the running one, `(1 − rate)·old + rate·new`
 /// (the first frame's alone when there is none yet), and returns it.
 fn blend_online(online: &mut Option<Vec<f32>>, histogram: Vec<f32>, rate: f32) -> &[f32] {
@@ -454,8 +487,7 @@ impl Segmenter {
         // `distance_near`, and the far pixels inside it.
         let margin = o.adapt_margin as usize;
         let near = distance_near(labels, w, h, margin + 1, &mut self.distance);
-        let mut histogram = vec![0.0f32; COLOUR_BINS];
-        let mut total = 0.0f32;
+        let mut histogram = BinHistogram::new();
         for y in 0..h {
             for x in 0..w {
                 let far = match near {
@@ -465,15 +497,13 @@ impl Segmenter {
                     _ => true,
                 };
                 if far {
-                    histogram[self.features.colour[y * w + x].bin as usize] += 1.0;
-                    total += 1.0;
+                    histogram.add(self.features.colour[y * w + x].bin);
                 }
             }
         }
-        if total < 1.0 {
+        let Some(histogram) = histogram.normalised() else {
             return;
-        }
-        histogram.iter_mut().for_each(|v| *v /= total);
+        };
         let online = blend_online(&mut self.online_background, histogram, o.adapt_rate);
         // p_bg(colour, pattern) = (1 − s)·trained + s·online(colour)·p_trained(pattern | bg).
         let share = o.adapt_share;
@@ -501,21 +531,18 @@ impl Segmenter {
         if o.part_colour_share <= 0.0 || w == 0 {
             return;
         }
-        let mut histogram = vec![0.0f32; COLOUR_BINS];
-        let mut total = 0.0f32;
+        let mut histogram = BinHistogram::new();
         for (i, _) in self.part.iter().enumerate().filter(|(_, &p)| p) {
             if !suit_rows.contains(&(i / w)) {
-                histogram[self.features.colour[i].bin as usize] += 1.0;
-                total += 1.0;
+                histogram.add(self.features.colour[i].bin);
             }
         }
-        if total < 1.0 {
+        let Some(histogram) = histogram.normalised() else {
             return;
-        }
-        histogram.iter_mut().for_each(|v| *v /= total);
+        };
         let online = blend_online(&mut self.online_part, histogram, o.part_colour_rate);
+        let share = o.part_colour_share;
         for (bin, v) in self.part_bin.iter_mut().enumerate() {
-            let share = o.part_colour_share;
             *v = mixed_nll(self.tables.part[bin], share, share * online[bin]);
         }
     }
@@ -1008,6 +1035,18 @@ fn ms(started: Instant) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_histogram_counts_each_bin_once_per_pixel_and_sums_to_one() {
+        // Bins 3, 3, 5, 3: three quarters in bin 3, a quarter in bin 5.
+        let mut counts = BinHistogram::new();
+        [3, 3, 5, 3].into_iter().for_each(|bin| counts.add(bin));
+        let histogram = counts.normalised().expect("four pixels");
+        assert_eq!(histogram.len(), COLOUR_BINS);
+        assert_eq!((histogram[3], histogram[5]), (0.75, 0.25));
+        assert_eq!(histogram.iter().sum::<f32>(), 1.0);
+        assert_eq!(BinHistogram::new().normalised(), None);
+    }
 
     #[test]
     fn the_first_histogram_is_taken_whole_and_later_ones_blended_at_the_rate() {
