@@ -112,6 +112,11 @@ enum Command {
         /// of 2026-12-05).
         #[arg(long)]
         part_colours: Option<f32>,
+        /// The edge snapping keeps an outline pixel of a marker's colour on the person unless at
+        /// least this share of the room around it has a marker's colour too (default 0.5; above 1
+        /// keeps it always, as before the tenth session of 2026-12-05).
+        #[arg(long)]
+        keep_room_share: Option<f32>,
         /// Also write the graph of this frame index as GCG1 (to compare solvers).
         #[arg(long, requires = "graph_out")]
         dump_graph: Option<u64>,
@@ -477,11 +482,12 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
     Ok(Some(png_names_of_frames(Path::new(input))?))
 }
 
-/// The segmenter's options with `suitcap segment`'s overrides of the part memory (nats) and the
-/// share of the person's own part colours.
+/// The segmenter's options with `suitcap segment`'s overrides of the part memory (nats), the
+/// share of the person's own part colours and the edge snapping's room share for marker colours.
 fn segmenter_options(
     part_memory: Option<f32>,
     part_colours: Option<f32>,
+    keep_room_share: Option<f32>,
 ) -> anyhow::Result<SegmenterOptions> {
     let mut options = SegmenterOptions::default();
     if let Some(nats) = part_memory {
@@ -495,6 +501,12 @@ fn segmenter_options(
             bail!("--part-colours: {share} is not a share between 0 and 1");
         }
         options.part_colour_share = share;
+    }
+    if let Some(share) = keep_room_share {
+        if !(share.is_finite() && share >= 0.0) {
+            bail!("--keep-room-share: {share} is not a finite share >= 0");
+        }
+        options.snap_keep_room_share = share;
     }
     Ok(options)
 }
@@ -863,9 +875,10 @@ fn main() -> ExitCode {
             weights,
             part_memory,
             part_colours,
+            keep_room_share,
             dump_graph,
             graph_out,
-        } => segmenter_options(*part_memory, *part_colours).and_then(|options| {
+        } => segmenter_options(*part_memory, *part_colours, *keep_room_share).and_then(|options| {
             segment(
                 suit,
                 input,

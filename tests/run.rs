@@ -198,6 +198,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         ("remembering", &[][..]),
         ("plain", &["--part-memory", "0"][..]),
         ("trained colours", &["--part-colours", "0"][..]),
+        ("marker colours kept", &["--keep-room-share", "2"][..]),
     ] {
         let out = tmp.path().join(name);
         let report = succeeded(segment(&out, extra));
@@ -215,5 +216,10 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
     assert!(!output.status.success());
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("--part-colours"), "{stderr}");
+    assert!(!out.exists(), "nothing written for a bad setting");
+    let output = segment(&out, &["--keep-room-share", "NaN"]);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("--keep-room-share"), "{stderr}");
     assert!(!out.exists(), "nothing written for a bad setting");
 }

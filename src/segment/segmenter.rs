@@ -76,6 +76,10 @@ pub struct SegmenterOptions {
     pub snap_passes: u32,
     /// How far (pixels, chessboard) the edge snapping looks for the colours of both sides.
     pub snap_radius: u32,
+    /// The edge snapping leaves an outline pixel of a marker's colour on the person unless at least
+    /// this share of the room's samples around it have a marker's colour too (above 1: always, as
+    /// before the tenth session of 2026-12-05; see [`snap`](super::snap)).
+    pub snap_keep_room_share: f32,
     /// Share of the online background histogram that each new frame replaces (0 = no adaptation).
     pub adapt_rate: f32,
     /// Background pixels closer than this to the person (at the cut's resolution) are not learned.
@@ -176,6 +180,7 @@ impl Default for SegmenterOptions {
             refine_wide: true,
             snap_passes: 2,
             snap_radius: 3,
+            snap_keep_room_share: 0.5,
             adapt_rate: 0.3,
             adapt_margin: 4,
             adapt_share: 0.7,
@@ -855,6 +860,7 @@ impl Segmenter {
             self.options.snap_radius,
             self.options.snap_passes,
             |rgb| self.gate.is_marker(self.lut.get(rgb)),
+            self.options.snap_keep_room_share,
         );
         times.refine = ms(started);
 
