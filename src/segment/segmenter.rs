@@ -178,7 +178,7 @@ impl Default for SegmenterOptions {
             max_hole_fraction: 0.001,
             refine_prior: 3.0,
             refine_wide: true,
-            snap_passes: 2,
+            snap_passes: 4,
             snap_radius: 3,
             snap_keep_room_share: 0.5,
             adapt_rate: 0.3,

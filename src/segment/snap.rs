@@ -21,21 +21,24 @@
 //! pixels from the same labels, then the next pass looks at the new outline; a pass that changes
 //! nothing ends it.
 //!
-//! The room test (tenth session of 2026-12-05): before it, every marker-coloured outline pixel
-//! stayed person, and where the room has a marker's hue the mask kept a rim of it a pixel or two
-//! wide along the suit (walk 10_04 over coffee: 2.1 % of the person's area in the ring just outside
-//! the true outline, 0.2 % missed just inside). Chosen on the nine selection renderings
-//! (`docs/measurements.md`): mean IoU 0.9487 with every marker colour kept, 0.9583 with none kept,
-//! 0.9578 / 0.9575 / **0.9571** / 0.9566 with the test at shares 0.15 / 0.3 / 0.5 / 0.7, where the
-//! markers' recall over the nine was 0.9171 kept, 0.9126 none, 0.9140 / 0.9144 / **0.9147** / 0.9150
-//! (precision 0.9745, 0.9861, 0.9858 / 0.9855 / **0.9849** / 0.9836).
-//!
 //! Chosen on the default suit's *training* datasets (punch 02_05, dance 05_04, jumping jacks 13_30,
 //! drink 14_37; every eighth frame, the shipped tables, without the kept colours): the mean IoU
 //! rose by 0.026–0.029 with radius 3 and two passes; radius 2 and 4 and a third pass gave within
 //! 0.004 of that, and deciding a band two pixels wide (samples beyond it) only 0.012–0.015. The
 //! figures on the test sequences are in `docs/measurements.md` (*Seventh session*). It costs about
 //! 0.6 ms per 640×480 frame and 1.5 ms per 1440×1080 frame.
+//!
+//! The room test and four passes (tenth session of 2026-12-05): before it, every marker-coloured
+//! outline pixel stayed person, and where the room has a marker's hue the mask kept a rim of it a
+//! pixel or two wide along the suit (walk 10_04 over coffee: 2.1 % of the person's area in the ring
+//! just outside the true outline, 0.2 % missed just inside). Chosen on the nine selection
+//! renderings (`docs/measurements.md`), two passes: mean IoU 0.9487 with every marker colour kept,
+//! 0.9583 with none kept, 0.9578 / 0.9575 / **0.9571** / 0.9566 with the room test at shares 0.15 /
+//! 0.3 / 0.5 / 0.7, where the markers' recall over the nine was 0.9171 kept, 0.9126 none, 0.9140 /
+//! 0.9144 / **0.9147** / 0.9150 (precision 0.9745, 0.9861, 0.9858 / 0.9855 / **0.9849** / 0.9836).
+//! Then, at 0.5, passes 3 / **4** / 6 gave 0.9585 / **0.9589** / 0.9592 (recall 0.9143 / **0.9138**
+//! / 0.9135, precision 0.9857 / **0.9863** / 0.9866) and radius 2 / 4 at two passes 0.9568 / 0.9571:
+//! with the rim gone, the outline has more than two pixels to travel in places.
 //!
 //! The snapped [`Mask`] goes on to marker detection like the refined one.
 
