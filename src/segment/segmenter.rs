@@ -36,7 +36,9 @@
 //!    frames before ([`SegmenterOptions::part_colour_share`]);
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut; then moves the outline onto the frame's colour edge
-//!    ([`snap`](super::snap); its time is counted in the refinement's).
+//!    in up to four passes, a marker-coloured outline pixel staying person unless the room beside
+//!    it has a marker's hue too ([`snap`](super::snap), [`SegmenterOptions::snap_keep_room_share`];
+//!    its time is counted in the refinement's).
 //!
 //! A frame with nobody in it gives an empty mask. The mask goes to marker detection and the descriptors;
 //! the box of the suit alone ([`Segmentation::suit_box`]) to the body-size measurement.
