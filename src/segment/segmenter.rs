@@ -33,7 +33,8 @@
 //!    ([`SegmenterOptions::part_memory`]), so a head over a room of its colour is not lost every
 //!    other frame; and the part test's colours mix the trained table (every training subject's
 //!    skin and shoes) with this person's own, learned from the heads and shoes attached in the
-//!    frames before ([`SegmenterOptions::part_colour_share`]);
+//!    frames before ([`SegmenterOptions::part_colour_share`]), the hands' test within the suit's
+//!    rows more than the head's and shoes' ([`SegmenterOptions::hand_colour_share`]);
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut; then moves the outline onto the frame's colour edge
 //!    in up to four passes, a marker-coloured outline pixel staying person unless the room beside
@@ -167,7 +168,8 @@ pub struct SegmenterOptions {
     /// 0.6 / **0.75** / 0.9 / 1 gave 0.9601 / 0.9605 / **0.9615** / 0.9608 / 0.9581 (at 0.75 the
     /// drink's hands +0.014, walk 07_04 +0.007, dance 05_04 +0.004, the bend −0.005; markers'
     /// recall and precision over the nine within 0.0001); docs/measurements.md, tenth session.
-    /// The refinement of part pixels keeps the head-and-shoe mix.
+    /// The refinement of part pixels keeps the head-and-shoe mix. With `part_colour_share` 0
+    /// nothing is learned and both tests use the trained table.
     pub hand_colour_share: f32,
     /// Share of the online part-colour histogram that each frame's head and shoes replace.
     pub part_colour_rate: f32,
