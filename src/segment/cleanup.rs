@@ -359,12 +359,16 @@ pub fn remove_large_off_cloth(
         region[i] && off_cloth(i)
     }));
     let stats = components(crop, b.width(), b.height(), true, ids);
-    let too_large = |id: u32| id != u32::MAX && stats[id as usize].0 > max_area;
-    for (k, _) in ids.iter().enumerate().filter(|&(_, &id)| too_large(id)) {
+    let too_large = |count: usize| count > max_area;
+    for (k, _) in ids
+        .iter()
+        .enumerate()
+        .filter(|&(_, &id)| id != u32::MAX && too_large(stats[id as usize].0))
+    {
         region[b.grid_index(k, width)] = false;
     }
     let mut removed = (0, 0);
-    for &(count, _) in stats.iter().filter(|&&(count, _)| count > max_area) {
+    for &(count, _) in stats.iter().filter(|&&(count, _)| too_large(count)) {
         removed = (removed.0 + 1, removed.1 + count);
     }
     removed
