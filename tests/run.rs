@@ -207,19 +207,15 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         assert_eq!(masks, 12, "{name}");
     }
     let out = tmp.path().join("bad");
-    let output = segment(&out, &["--part-memory=-1"]);
-    assert!(!output.status.success());
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(stderr.contains("--part-memory"), "{stderr}");
-    assert!(!out.exists(), "nothing written for a bad setting");
-    let output = segment(&out, &["--part-colours", "1.5"]);
-    assert!(!output.status.success());
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(stderr.contains("--part-colours"), "{stderr}");
-    assert!(!out.exists(), "nothing written for a bad setting");
-    let output = segment(&out, &["--keep-room-share", "NaN"]);
-    assert!(!output.status.success());
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(stderr.contains("--keep-room-share"), "{stderr}");
-    assert!(!out.exists(), "nothing written for a bad setting");
+    for (bad, flag) in [
+        (&["--part-memory=-1"][..], "--part-memory"),
+        (&["--part-colours", "1.5"][..], "--part-colours"),
+        (&["--keep-room-share", "NaN"][..], "--keep-room-share"),
+    ] {
+        let output = segment(&out, bad);
+        assert!(!output.status.success(), "{bad:?}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains(flag), "{stderr}");
+        assert!(!out.exists(), "nothing written for a bad setting");
+    }
 }

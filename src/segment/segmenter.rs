@@ -773,7 +773,8 @@ impl Segmenter {
         }
         // The suit alone: its box (to the frame for the body size) and its rows (the part limits').
         let suit_bounds = bounding_box_of(&labels, w);
-        let suit_rows = suit_bounds.map_or(0, |(_, y0, _, y1)| y1 - y0);
+        // The suit's rows: the hands lie within them, the head and the shoes above and below.
+        let suit_rows = suit_bounds.map_or(0..0, |(_, y0, _, y1)| y0.min(h)..y1.min(h));
         let suit_box = suit_bounds.map(|(x0, y0, x1, y1)| {
             let to_frame = |v: usize, limit: u32| ((v * factor as usize) as u32).min(limit);
             let (fw, fh) = (frame.width(), frame.height());
@@ -797,7 +798,7 @@ impl Segmenter {
         let sigma = self.tables.weights.colour;
         let (part_nll, prior, bg) = (&self.part_bin, self.tables.part_prior, &self.background_bin);
         let hand_nll = &self.hand_bin;
-        let hand_rows = suit_bounds.map_or((0, 0), |(_, y0, _, y1)| (y0, y1));
+        let hand_rows = &suit_rows;
         let suit_area = labels.iter().filter(|&&l| l).count() as f32;
         let memory = if self.previous_parts.len() == w * h {
             self.options.part_memory
@@ -813,7 +814,7 @@ impl Segmenter {
                 } else {
                     0.0
                 };
-                let nll = if (hand_rows.0..hand_rows.1).contains(&(i / w)) {
+                let nll = if hand_rows.contains(&(i / w)) {
                     hand_nll[bin]
                 } else {
                     part_nll[bin]
@@ -825,7 +826,7 @@ impl Segmenter {
             max_area: (self.options.part_max_share * suit_area) as usize,
             max_top_area: (self.options.part_max_top_share * suit_area) as usize,
             max_round_area: (self.options.part_max_round_share * suit_area) as usize,
-            min_depth: self.options.part_min_depth * suit_rows as f32,
+            min_depth: self.options.part_min_depth * suit_rows.len() as f32,
         };
         let mut attached = attach_parts_narrowing(
             &mut person,
@@ -859,7 +860,6 @@ impl Segmenter {
         // The head and the shoes: the parts above the suit's top row and below its bottom row
         // (none with nobody in the frame). On a stream's first frame, segmented twice, the second
         // look remembers the first's.
-        let suit_rows = suit_bounds.map_or(0..0, |(_, y0, _, y1)| y0.min(h)..y1.min(h));
         if self.options.part_memory > 0.0 {
             grow_square_into(
                 &self.part,
