@@ -467,6 +467,11 @@ pub struct PartLimits {
     /// through a narrow neck, wrist or ankle, while background of a part's colour that the flood
     /// ran into lies along the suit in a thin strip.
     pub min_depth: f32,
+    /// The largest area per pixel of contact with the suit of a piece beside it, one that reaches
+    /// neither the suit's top row nor its bottom one (a hand, not a head or a shoe): a hand joins
+    /// the sleeve at its wrist, background of a part's colour beside a leg is a large piece that
+    /// the flood entered through a pixel or two.
+    pub max_side_depth: f32,
 }
 
 /// Adds to the person the band pixels (see [`part_band`]) that look like a part of the person
@@ -488,6 +493,7 @@ pub fn attach_parts(
     part.clear();
     part.resize(person.len(), false);
     let suit_top = person.iter().position(|&p| p).map_or(0, |i| i / width);
+    let suit_bottom = person.iter().rposition(|&p| p).map_or(0, |i| i / width);
     stack.clear();
     stack.extend((0..person.len()).filter(|&i| person[i]));
     while let Some(i) = stack.pop() {
@@ -532,7 +538,10 @@ pub fn attach_parts(
             .max_area
             .max(if at_top { limits.max_top_area } else { 0 })
             .max(if round { limits.max_round_area } else { 0 });
-        area <= max_area && area as f32 >= limits.min_depth * contact[c] as f32
+        let beside = !at_top && y1 + b.y0 < suit_bottom;
+        area <= max_area
+            && area as f32 >= limits.min_depth * contact[c] as f32
+            && !(beside && area as f32 > limits.max_side_depth * contact[c] as f32)
     };
     let mut attached = Attached::default();
     for (k, &id) in ids.iter().enumerate() {
@@ -790,6 +799,7 @@ mod tests {
             max_top_area: 0,
             max_round_area: 0,
             min_depth: 0.0,
+            max_side_depth: f32::INFINITY,
         };
         let added = attach_parts(
             &mut person,
@@ -831,6 +841,7 @@ mod tests {
             max_top_area: 0,
             max_round_area: 0,
             min_depth: 1.5,
+            max_side_depth: f32::INFINITY,
         };
         let added = attach_parts(&mut person, &band, w, h, like, deep, &mut part, &mut stack).added;
         assert_eq!(added, 2);
@@ -856,6 +867,7 @@ mod tests {
                 max_top_area: 4,
                 max_round_area,
                 min_depth: 0.0,
+                max_side_depth: f32::INFINITY,
             };
             let added = attach_parts(&mut grown, &band, w, h, like, limits, part, stack).added;
             (added, grown)
@@ -879,6 +891,39 @@ mod tests {
     }
 
     #[test]
+    fn a_piece_beside_the_suit_may_not_hang_on_by_a_pixel() {
+        // Suit in rows 3..=7, columns 2..=3. Beside it (rows 4..=5) a piece of 5 px that touches
+        // the suit with one pixel (depth 5); on its bottom row a piece of 3 px that touches it with
+        // one (depth 3, a shoe: not beside the suit).
+        let (person, w, h, suit, band) = upright(&[
+            "........", "........", "........", "..##....", "..#####.", "..##.##.", "..##....",
+            "..#####.",
+        ]);
+        let like = |i: usize| person[i];
+        let (mut part, mut stack) = (Vec::new(), Vec::new());
+        let mut attach = |max_side_depth| {
+            let mut grown = suit.clone();
+            let limits = PartLimits {
+                max_area: 5,
+                max_top_area: 0,
+                max_round_area: 0,
+                min_depth: 0.0,
+                max_side_depth,
+            };
+            let added =
+                attach_parts(&mut grown, &band, w, h, like, limits, &mut part, &mut stack).added;
+            (added, grown)
+        };
+        let (added, grown) = attach(5.0);
+        assert_eq!(added, 8);
+        assert_eq!(grown, person);
+        // At most 2 px per pixel of contact: the piece beside goes, the shoe (depth 3) stays.
+        let (added, grown) = attach(2.0);
+        assert_eq!(added, 3);
+        assert!(grown[7 * w + 6] && !grown[4 * w + 4] && !grown[5 * w + 6]);
+    }
+
+    #[test]
     fn a_ragged_part_at_the_top_may_be_larger_than_one_beside_the_suit() {
         // Suit in rows 3..=7, columns 2..=3; two ragged pieces of 6 px in 4 × 3 boxes (fill 0.5 <
         // ROUND_FILL): one on top of the suit reaching above its top row (a head with a hand
@@ -896,6 +941,7 @@ mod tests {
                 max_top_area,
                 max_round_area: 3,
                 min_depth: 0.0,
+                max_side_depth: f32::INFINITY,
             };
             let added =
                 attach_parts(&mut grown, &band, w, h, like, limits, &mut part, &mut stack).added;
@@ -927,6 +973,7 @@ mod tests {
             max_top_area: 4,
             max_round_area: 0,
             min_depth: 0.0,
+            max_side_depth: f32::INFINITY,
         };
         let (mut part, mut stack, mut scratch) = (Vec::new(), Vec::new(), (Vec::new(), Vec::new()));
         // Within the wide band alone the head's piece (8 px) and the side piece (4 px) are too large.
