@@ -557,35 +557,19 @@ impl BodyPart {
         self.marker_grid(suit).cells().collect()
     }
 
-    /// The four corners of a marker square (local frame), ordered so that `(b − a) × (c − a)` points
-    /// outward, and its centre.
-    pub fn marker_corners(&self, suit: &SuitDefinition, cell: &MarkerCell) -> ([Vec3; 4], Vec3) {
+    /// The point of a marker square at (`a`, `b`) ∈ [−1, 1]² across it (along the part's axis and
+    /// round it; (0, 0) is its centre, (±1, ±1) its corners) and the outward surface normal there,
+    /// in the part's local frame.
+    pub fn marker_point(
+        &self,
+        suit: &SuitDefinition,
+        cell: &MarkerCell,
+        (a, b): (f32, f32),
+    ) -> (Vec3, Vec3) {
         let half = suit.marker_size_cm * 0.5;
         let ds = half / self.circumference_at(cell.centre_u);
-        let point = |du: f32, dsf: f32| {
-            let u = cell.centre_u + du;
-            self.surface_point(u, self.theta_for(u, cell.centre_s + dsf))
-                .0
-        };
-        let corners = [
-            point(-half, -ds),
-            point(-half, ds),
-            point(half, ds),
-            point(half, -ds),
-        ];
-        let corners = if (corners[1] - corners[0])
-            .cross(corners[2] - corners[0])
-            .dot(
-                self.surface_point(cell.centre_u, self.theta_for(cell.centre_u, cell.centre_s))
-                    .1,
-            )
-            >= 0.0
-        {
-            corners
-        } else {
-            [corners[0], corners[3], corners[2], corners[1]]
-        };
-        (corners, point(0.0, 0.0))
+        let u = cell.centre_u + a * half;
+        self.surface_point(u, self.theta_for(u, cell.centre_s + b * ds))
     }
 }
 
@@ -1040,16 +1024,17 @@ mod tests {
         let part = cylinder();
         let s = suit();
         let m = part.markers(&s)[7 + 5]; // on the straight section
-        let (corners, centre) = part.marker_corners(&s, &m);
-        let side_along = corners[0].distance(corners[3]);
-        let side_around = corners[0].distance(corners[1]);
+        let corner = |a: f32, b: f32| part.marker_point(&s, &m, (a, b)).0;
+        let side_along = corner(-1.0, -1.0).distance(corner(1.0, -1.0));
+        let side_around = corner(-1.0, -1.0).distance(corner(-1.0, 1.0));
         assert!((side_along - 4.0).abs() < 0.01, "{side_along}");
         // A 4 cm arc on a 10 cm radius has a 3.97 cm chord.
         assert!((side_around - 3.973).abs() < 0.02, "{side_around}");
+        let (centre, normal) = part.marker_point(&s, &m, (0.0, 0.0));
         assert!((centre.x.powi(2) + centre.z.powi(2)).sqrt() - 10.0 < 1e-3);
-        // Outward winding.
-        let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
-        assert!(n.dot(Vec3::new(centre.x, 0.0, centre.z)) > 0.0);
+        // The normal points outward, away from the axis.
+        let radial = Vec3::new(centre.x, 0.0, centre.z).normalize();
+        assert!(normal.dot(radial) > 0.99, "{normal}");
     }
 
     #[test]

@@ -141,7 +141,10 @@ pub struct MarkerRecord {
     /// Projected centre, pixels (pixel centres at +0.5).
     pub x: f32,
     pub y: f32,
-    /// Fraction of the marker's projected area that is visible, in [0, 1].
+    /// Share of the marker's printed square that faces the camera unoccluded, in [0, 1] (the
+    /// generator samples its surface; before the eleventh session of 2026-12-05 it divided the
+    /// visible pixels by the flat square's projected area, capped at 1, which counted a marker
+    /// wrapped round a limb's outline as wholly visible).
     pub visible_fraction: f32,
     /// Visible area in pixels (a marker seen edge-on can be wholly visible and one pixel large).
     pub visible_px: u32,

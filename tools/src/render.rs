@@ -7,7 +7,9 @@
 //! [`BodyLayer`]: colour, depth and marker id per pixel. [`compose`] puts the layer over the
 //! background, applies the exposure gain, a Gaussian blur and sensor noise (read + shot), and returns
 //! the 8-bit frame. The ground-truth mask is the set of pixels the body covers before blur;
-//! [`BodyRenderer::visible_markers`] reports each visible marker's projected centre and visible fraction.
+//! [`BodyRenderer::visible_markers`] reports each visible marker's projected centre and the share of
+//! its square that faces the camera unoccluded (sampled on the body's surface and tested against the
+//! layer's depth).
 
 use std::collections::HashMap;
 
@@ -25,6 +27,13 @@ use suitcap::suit::SuitDefinition;
 const NEAR_CM: f32 = 5.0;
 /// "No marker" in [`BodyLayer::marker`].
 pub const NO_MARKER: u32 = u32::MAX;
+/// Points per side of a marker's square sampled for its visible fraction
+/// ([`BodyRenderer::visible_markers`]).
+pub const VISIBILITY_SAMPLES: usize = 8;
+/// How far (cm) a marker's surface point may lie behind the depth drawn at its pixel and still be
+/// what is seen there: the drawn mesh's chords lie up to a few millimetres inside the curved
+/// surface the points are taken on, an arm in front of the chest is centimetres nearer.
+pub const VISIBILITY_DEPTH_CM: f32 = 1.0;
 
 /// Lighting of the body for one frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -91,6 +100,8 @@ pub struct VisibleMarker {
     pub colour: usize,
     /// Projected centre, pixels.
     pub centre: Vec2,
+    /// Share of the marker's square that faces the camera unoccluded (see
+    /// [`VISIBILITY_SAMPLES`]): 4 × 4 cm of surface, however foreshortened.
     pub visible_fraction: f32,
     /// Visible pixels.
     pub visible_px: u32,
@@ -216,31 +227,46 @@ impl<'a> BodyRenderer<'a> {
         }
     }
 
-    /// World position of a marker's centre and its projected area (0 if it faces away).
-    fn marker_projection(
+    /// A marker's projected centre and the share of its square the camera sees: of
+    /// [`VISIBILITY_SAMPLES`]² points spread evenly over the square on the body's surface, those
+    /// that face the camera and lie no more than [`VISIBILITY_DEPTH_CM`] behind what `layer` drew
+    /// at their pixel (not behind an arm in front, another part, or round the far side of their
+    /// own limb). `None` when its centre is behind the camera.
+    fn marker_visibility(
         &self,
         world: &[Affine3A],
         part: usize,
         cell: &MarkerCell,
+        layer: &BodyLayer,
     ) -> Option<(Vec2, f32)> {
         let p = &self.body.parts[part];
         let transform = world[p.joint];
-        let (corners, centre) = p.marker_corners(self.suit, cell);
+        let (centre, _) = p.marker_point(self.suit, cell, (0.0, 0.0));
         let centre = self.camera.project(transform.transform_point3(centre))?;
-        let mut projected = [Vec2::ZERO; 4];
-        for (k, corner) in corners.iter().enumerate() {
-            projected[k] = self
-                .camera
-                .project(transform.transform_point3(*corner))?
-                .pixel;
+        let eye = self.camera.position();
+        let n = VISIBILITY_SAMPLES;
+        let across = |k: usize| (2 * k + 1) as f32 / n as f32 - 1.0;
+        let mut seen = 0;
+        for a in 0..n {
+            for b in 0..n {
+                let (point, normal) = p.marker_point(self.suit, cell, (across(a), across(b)));
+                let point = transform.transform_point3(point);
+                let normal = Vec3::from(transform.matrix3 * Vec3A::from(normal));
+                if (point - eye).dot(normal) >= 0.0 {
+                    continue;
+                }
+                let Some(projected) = self.camera.project(point) else {
+                    continue;
+                };
+                let (x, y) = (projected.pixel.x.floor(), projected.pixel.y.floor());
+                if x < 0.0 || y < 0.0 || x >= layer.width as f32 || y >= layer.height as f32 {
+                    continue;
+                }
+                let drawn = layer.depth.get(x as u32, y as u32);
+                seen += (projected.depth <= drawn + VISIBILITY_DEPTH_CM) as usize;
+            }
         }
-        // Shoelace; outward-wound corners have negative area in pixel coordinates when facing the camera.
-        let mut twice_area = 0.0;
-        for k in 0..4 {
-            let (a, b) = (projected[k], projected[(k + 1) % 4]);
-            twice_area += a.x * b.y - b.x * a.y;
-        }
-        Some((centre.pixel, (-0.5 * twice_area).max(0.0)))
+        Some((centre.pixel, seen as f32 / (n * n) as f32))
     }
 
     /// Every marker with at least one visible pixel in `layer` (drawn with the same `world`).
@@ -257,13 +283,8 @@ impl<'a> BodyRenderer<'a> {
                 continue;
             }
             let (part, cell) = &self.markers[k];
-            let Some((centre, area)) = self.marker_projection(world, *part, cell) else {
+            let Some((centre, fraction)) = self.marker_visibility(world, *part, cell, layer) else {
                 continue;
-            };
-            let fraction = if area > 0.0 {
-                (count as f32 / area).min(1.0)
-            } else {
-                0.0
             };
             out.push(VisibleMarker {
                 id: cell.id,
@@ -539,6 +560,65 @@ mod tests {
         assert!(
             checked > 20,
             "{checked} whole markers of at least 16 pixels"
+        );
+    }
+
+    #[test]
+    fn a_marker_facing_the_camera_is_wholly_visible_and_one_on_the_outline_about_half() {
+        let (w, h) = (640, 480);
+        let f = fixture(w, h);
+        let renderer = BodyRenderer::new(&f.suit, &SUBJECTS[0], &f.body, f.camera);
+        let mut layer = BodyLayer::new(w, h);
+        renderer.draw(&f.world, &lighting(), &mut layer);
+        let eye = f.camera.position();
+        let (mut facing, mut outline) = (0, 0);
+        for m in renderer.visible_markers(&f.world, &layer) {
+            let k = renderer
+                .markers
+                .iter()
+                .position(|(_, c)| c.id == m.id)
+                .expect("known marker");
+            let (part, cell) = &renderer.markers[k];
+            let p = &f.body.parts[*part];
+            let transform = f.world[p.joint];
+            let at = |a: f32, b: f32| {
+                let (point, normal) = p.marker_point(&f.suit, cell, (a, b));
+                let point = transform.transform_point3(point);
+                let normal = Vec3::from(transform.matrix3 * Vec3A::from(normal));
+                (point, normal.dot((eye - point).normalize()))
+            };
+            // The pixels of its square seen face-on (shoelace over its projected corners).
+            let corners = [(-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0)]
+                .map(|(a, b)| f.camera.project(at(a, b).0).expect("in front").pixel);
+            let square = (0..4)
+                .map(|i| corners[i].perp_dot(corners[(i + 1) % 4]))
+                .sum::<f32>()
+                .abs()
+                / 2.0;
+            let (_, cos) = at(0.0, 0.0);
+            if cos > 0.9 && m.visible_px as f32 >= 0.9 * square {
+                // Square to the camera, and as many pixels of its colour as its square covers.
+                facing += 1;
+                assert!(
+                    m.visible_fraction > 0.95,
+                    "marker {}: {}",
+                    m.id,
+                    m.visible_fraction
+                );
+            } else if cos.abs() < 0.1 {
+                // Its centre on the limb's outline: about half of it lies round the far side.
+                outline += 1;
+                assert!(
+                    (0.2..=0.8).contains(&m.visible_fraction),
+                    "marker {}: {}",
+                    m.id,
+                    m.visible_fraction
+                );
+            }
+        }
+        assert!(
+            facing > 10 && outline > 3,
+            "{facing} facing, {outline} on the outline"
         );
     }
 
