@@ -378,6 +378,22 @@ fn mixed_nll(trained_nll: f32, share: f32, online_part: f32) -> f32 {
     -(p.max(1e-6)).ln()
 }
 
+/// The part test's two tables from the trained part table (`trained`, NLL per colour bin) and the
+/// person's own head and shoe colours (`online`, a histogram): `part`, for the head and the shoes,
+/// mixes them at `part_share`, `hand`, for the hands within the suit's rows, at `hand_share`.
+fn mix_part_tables(
+    trained: &[f32],
+    online: &[f32],
+    (part_share, hand_share): (f32, f32),
+    (part, hand): (&mut [f32], &mut [f32]),
+) {
+    for (table, share) in [(part, part_share), (hand, hand_share)] {
+        for ((v, &nll), &p) in table.iter_mut().zip(trained).zip(online) {
+            *v = mixed_nll(nll, share, share * p);
+        }
+    }
+}
+
 /// −ln Σ_class p(class · COLOUR_BINS + bin) of a joint colour × pattern NLL table.
 fn marginal_nll(joint: &[f32]) -> Vec<f32> {
     (0..COLOUR_BINS)
@@ -576,14 +592,12 @@ impl Segmenter {
             return;
         };
         let online = blend_online(&mut self.online_part, histogram, o.part_colour_rate);
-        for (table, share) in [
-            (&mut self.part_bin, o.part_colour_share),
-            (&mut self.hand_bin, o.hand_colour_share),
-        ] {
-            for (bin, v) in table.iter_mut().enumerate() {
-                *v = mixed_nll(self.tables.part[bin], share, share * online[bin]);
-            }
-        }
+        mix_part_tables(
+            &self.tables.part,
+            online,
+            (o.part_colour_share, o.hand_colour_share),
+            (&mut self.part_bin, &mut self.hand_bin),
+        );
     }
 
     /// Builds the frame's graph (without cutting it); the graph is then available from [`Segmenter::graph`].
@@ -1106,6 +1120,19 @@ mod tests {
             [0.75, 0.25]
         );
         assert_eq!(online, Some(vec![0.75, 0.25]));
+    }
+
+    #[test]
+    fn the_hands_table_leans_on_the_persons_own_colours_at_its_own_share() {
+        // Two bins: training saw skin (bin 0) and the person's head shows only bin 1.
+        let trained = [0.5f32.ln().abs(), 0.5f32.ln().abs()];
+        let online = [0.0, 1.0];
+        let (mut part, mut hand) = ([0.0; 2], [0.0; 2]);
+        mix_part_tables(&trained, &online, (0.3, 0.75), (&mut part, &mut hand));
+        // Head and shoes: 0.7 · 0.5 = 0.35 and 0.35 + 0.3 = 0.65.
+        assert!((part[0] + 0.35f32.ln()).abs() < 1e-6 && (part[1] + 0.65f32.ln()).abs() < 1e-6);
+        // Hands: 0.25 · 0.5 = 0.125 and 0.125 + 0.75 = 0.875.
+        assert!((hand[0] + 0.125f32.ln()).abs() < 1e-6 && (hand[1] + 0.875f32.ln()).abs() < 1e-6);
     }
 
     #[test]
