@@ -61,7 +61,7 @@ use super::features::{
     TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
-use super::snap::snap_to_colour_edges;
+use super::snap::{snap_to_colour_edges, Snapping};
 use super::tables::SegmenterTables;
 use crate::mask::{bounding_box_of, grow_square_into, Mask};
 use crate::suit::SuitDefinition;
@@ -910,14 +910,14 @@ impl Segmenter {
 
         let started = Instant::now();
         let mut mask = self.refine(frame, &person, w, h);
-        snap_to_colour_edges(
-            frame,
-            &mut mask,
-            self.options.snap_radius,
-            self.options.snap_passes,
-            |rgb| self.gate.is_marker(self.lut.get(rgb)),
-            self.options.snap_keep_room_share,
-        );
+        let snapping = Snapping {
+            radius: self.options.snap_radius,
+            passes: self.options.snap_passes,
+            keep_room_share: self.options.snap_keep_room_share,
+        };
+        snap_to_colour_edges(frame, &mut mask, snapping, |rgb| {
+            self.gate.is_marker(self.lut.get(rgb))
+        });
         times.refine = ms(started);
 
         // History for the next frame.

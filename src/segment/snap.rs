@@ -48,19 +48,33 @@ use image::RgbImage;
 use super::cleanup::PixelBox;
 use crate::mask::Mask;
 
-/// Snaps `mask`'s outline to the colour edges of `frame` (see the module documentation) in up to
-/// `passes` passes with samples within `radius` pixels; person pixels whose colour `keep` accepts
-/// stay person unless `room_share` or more of the background samples around them have such a
-/// colour too (above 1: they always stay). Returns how many pixels changed label, or `None` (and
-/// leaves the mask alone) when the frame and the mask differ in size.
+/// How [`snap_to_colour_edges`] snaps an outline.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Snapping {
+    /// How far (pixels, chessboard) the colours of both sides are sampled.
+    pub radius: u32,
+    /// Passes; each moves the outline by a pixel at most (0: none).
+    pub passes: u32,
+    /// Person pixels of a kept colour stay person unless at least this share of the background
+    /// samples around them have a kept colour too (above 1: they always stay).
+    pub keep_room_share: f32,
+}
+
+/// Snaps `mask`'s outline to the colour edges of `frame` (see the module documentation) as
+/// `snapping` says; person pixels whose colour `keep` accepts stay person unless the room around
+/// them has such colours too ([`Snapping::keep_room_share`]). Returns how many pixels changed
+/// label, or `None` (and leaves the mask alone) when the frame and the mask differ in size.
 pub fn snap_to_colour_edges(
     frame: &RgbImage,
     mask: &mut Mask,
-    radius: u32,
-    passes: u32,
+    snapping: Snapping,
     keep: impl Fn([u8; 3]) -> bool,
-    room_share: f32,
 ) -> Option<usize> {
+    let Snapping {
+        radius,
+        passes,
+        keep_room_share: room_share,
+    } = snapping;
     let (w, h) = (mask.width() as usize, mask.height() as usize);
     if (frame.width() as usize, frame.height() as usize) != (w, h) {
         return None;
@@ -242,6 +256,16 @@ mod tests {
 
     const SUIT: [u8; 3] = [200, 200, 0];
     const ROOM_COLOUR: [u8; 3] = [0, 0, 200];
+    const TWO_PASSES: Snapping = Snapping {
+        radius: 3,
+        passes: 2,
+        keep_room_share: 0.5,
+    };
+    /// Kept colours stay whatever the room (the rule before the room test).
+    const ALWAYS_KEPT: Snapping = Snapping {
+        keep_room_share: 1.5,
+        ..TWO_PASSES
+    };
 
     /// An 8 × 3 frame: columns 0–3 the person, 4–7 the room, blurred across the edge so that
     /// column 3 is 0.7 person + 0.3 room and column 4 the other way round.
@@ -269,7 +293,7 @@ mod tests {
         // column 3; column 5 is the room itself.
         let mut wide = columns(5);
         assert_eq!(
-            snap_to_colour_edges(&frame, &mut wide, 3, 2, |_| false, 0.5),
+            snap_to_colour_edges(&frame, &mut wide, TWO_PASSES, |_| false),
             Some(3)
         );
         assert_eq!(wide, columns(4));
@@ -277,14 +301,14 @@ mod tests {
         // 0.3 mix; column 2 is the person itself.
         let mut narrow = columns(3);
         assert_eq!(
-            snap_to_colour_edges(&frame, &mut narrow, 3, 2, |_| false, 0.5),
+            snap_to_colour_edges(&frame, &mut narrow, TWO_PASSES, |_| false),
             Some(3)
         );
         assert_eq!(narrow, columns(4));
         // Right already: nothing moves.
         let mut right = columns(4);
         assert_eq!(
-            snap_to_colour_edges(&frame, &mut right, 3, 2, |_| false, 0.5),
+            snap_to_colour_edges(&frame, &mut right, TWO_PASSES, |_| false),
             Some(0)
         );
         assert_eq!(right, columns(4));
@@ -296,7 +320,7 @@ mod tests {
         let frame = blurred_edge();
         let kept = *frame.get_pixel(4, 0);
         let mut wide = columns(5);
-        let changed = snap_to_colour_edges(&frame, &mut wide, 3, 2, |rgb| rgb == kept.0, 0.5);
+        let changed = snap_to_colour_edges(&frame, &mut wide, TWO_PASSES, |rgb| rgb == kept.0);
         assert_eq!(changed, Some(0));
         assert_eq!(wide, columns(5));
     }
@@ -309,14 +333,14 @@ mod tests {
         let keep = |rgb: [u8; 3]| rgb == kept.0 || rgb == ROOM_COLOUR;
         let mut wide = columns(5);
         assert_eq!(
-            snap_to_colour_edges(&frame, &mut wide, 3, 2, keep, 0.5),
+            snap_to_colour_edges(&frame, &mut wide, TWO_PASSES, keep),
             Some(3)
         );
         assert_eq!(wide, columns(4));
         // Above 1 a kept colour always stays, whatever the room (the rule before the room test).
         let mut wide = columns(5);
         assert_eq!(
-            snap_to_colour_edges(&frame, &mut wide, 3, 2, keep, 1.5),
+            snap_to_colour_edges(&frame, &mut wide, ALWAYS_KEPT, keep),
             Some(0)
         );
         assert_eq!(wide, columns(5));
@@ -327,13 +351,13 @@ mod tests {
         let flat = RgbImage::from_pixel(8, 3, Rgb(SUIT));
         let mut mask = columns(5);
         assert_eq!(
-            snap_to_colour_edges(&flat, &mut mask, 3, 2, |_| false, 0.5),
+            snap_to_colour_edges(&flat, &mut mask, TWO_PASSES, |_| false),
             Some(0)
         );
         assert_eq!(mask, columns(5));
         let mut empty = Mask::empty(8, 3);
         assert_eq!(
-            snap_to_colour_edges(&blurred_edge(), &mut empty, 3, 2, |_| false, 0.5),
+            snap_to_colour_edges(&blurred_edge(), &mut empty, TWO_PASSES, |_| false),
             Some(0)
         );
         assert!(empty.is_empty());
@@ -344,7 +368,7 @@ mod tests {
         let mut mask = columns(5);
         let small = RgbImage::new(4, 3);
         assert_eq!(
-            snap_to_colour_edges(&small, &mut mask, 3, 2, |_| false, 0.5),
+            snap_to_colour_edges(&small, &mut mask, TWO_PASSES, |_| false),
             None
         );
         assert_eq!(mask, columns(5));
@@ -354,7 +378,15 @@ mod tests {
     fn zero_passes_change_nothing() {
         let mut mask = columns(5);
         assert_eq!(
-            snap_to_colour_edges(&blurred_edge(), &mut mask, 3, 0, |_| false, 0.5),
+            snap_to_colour_edges(
+                &blurred_edge(),
+                &mut mask,
+                Snapping {
+                    passes: 0,
+                    ..TWO_PASSES
+                },
+                |_| false
+            ),
             Some(0)
         );
         assert_eq!(mask, columns(5));
@@ -427,7 +459,12 @@ mod tests {
                 .collect();
             let mask = Mask::from_pixels(w, h, pixels).expect("12 × 10");
             let (mut fast, mut slow) = (mask.clone(), mask);
-            let changed = snap_to_colour_edges(&frame, &mut fast, radius, passes, |_| false, 0.5);
+            let changed = snap_to_colour_edges(
+                &frame,
+                &mut fast,
+                Snapping { radius, passes, ..TWO_PASSES },
+                |_| false,
+            );
             let expected = snap_everywhere(&frame, &mut slow, radius as usize, passes);
             prop_assert_eq!(fast, slow);
             prop_assert_eq!(changed, Some(expected));
