@@ -857,11 +857,8 @@ mod tests {
             "##....#.",
         ]);
         let suit: Vec<bool> = (0..w * h).map(|i| i % w < 2).collect();
-        let like = |i: usize| person[i];
         let band: Vec<bool> = suit.iter().map(|&s| !s).collect();
-        let (mut part, mut stack) = (Vec::new(), Vec::new());
-        let attach = |max_round_area, part: &mut Vec<bool>, stack: &mut Vec<usize>| {
-            let mut grown = suit.clone();
+        let attach = |max_round_area| {
             let limits = PartLimits {
                 max_area: 4,
                 max_top_area: 4,
@@ -869,13 +866,12 @@ mod tests {
                 min_depth: 0.0,
                 max_side_depth: f32::INFINITY,
             };
-            let added = attach_parts(&mut grown, &band, w, h, like, limits, part, stack).added;
-            (added, grown)
+            attach_from(&suit, &band, (w, h), |i| person[i], limits)
         };
-        let (added, grown) = attach(9, &mut part, &mut stack);
+        let (added, grown) = attach(9);
         assert_eq!(added, 9);
         assert!(grown[w + 4] && grown[3 * w + 2] && !grown[5 * w + 2] && !grown[7 * w + 6]);
-        let (added, _) = attach(0, &mut part, &mut stack);
+        let (added, _) = attach(0);
         assert_eq!(added, 0);
     }
 
@@ -890,6 +886,20 @@ mod tests {
         (person, w, h, suit, band)
     }
 
+    /// [`attach_parts`] from `suit` within `band`: the pixels it added and the person it grew.
+    fn attach_from(
+        suit: &[bool],
+        band: &[bool],
+        (w, h): (usize, usize),
+        like: impl Fn(usize) -> bool,
+        limits: PartLimits,
+    ) -> (usize, Vec<bool>) {
+        let (mut part, mut stack) = (Vec::new(), Vec::new());
+        let mut grown = suit.to_vec();
+        let added = attach_parts(&mut grown, band, w, h, like, limits, &mut part, &mut stack).added;
+        (added, grown)
+    }
+
     #[test]
     fn a_piece_beside_the_suit_may_not_hang_on_by_a_pixel() {
         // Suit in rows 3..=7, columns 2..=3. Beside it (rows 4..=5) a piece of 5 px that touches
@@ -899,10 +909,7 @@ mod tests {
             "........", "........", "........", "..##....", "..#####.", "..##.##.", "..##....",
             "..#####.",
         ]);
-        let like = |i: usize| person[i];
-        let (mut part, mut stack) = (Vec::new(), Vec::new());
-        let mut attach = |max_side_depth| {
-            let mut grown = suit.clone();
+        let attach = |max_side_depth| {
             let limits = PartLimits {
                 max_area: 5,
                 max_top_area: 0,
@@ -910,9 +917,7 @@ mod tests {
                 min_depth: 0.0,
                 max_side_depth,
             };
-            let added =
-                attach_parts(&mut grown, &band, w, h, like, limits, &mut part, &mut stack).added;
-            (added, grown)
+            attach_from(&suit, &band, (w, h), |i| person[i], limits)
         };
         let (added, grown) = attach(5.0);
         assert_eq!(added, 8);
@@ -932,10 +937,7 @@ mod tests {
             ".....#..", "....##..", "..###...", "..##....", "..####..", "..##.##.", "..##..##",
             "..##....",
         ]);
-        let like = |i: usize| person[i];
-        let (mut part, mut stack) = (Vec::new(), Vec::new());
-        let mut attach = |max_top_area| {
-            let mut grown = suit.clone();
+        let attach = |max_top_area| {
             let limits = PartLimits {
                 max_area: 3,
                 max_top_area,
@@ -943,9 +945,7 @@ mod tests {
                 min_depth: 0.0,
                 max_side_depth: f32::INFINITY,
             };
-            let added =
-                attach_parts(&mut grown, &band, w, h, like, limits, &mut part, &mut stack).added;
-            (added, grown)
+            attach_from(&suit, &band, (w, h), |i| person[i], limits)
         };
         let (added, grown) = attach(6);
         assert_eq!(added, 6);
