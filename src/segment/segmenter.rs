@@ -916,7 +916,7 @@ impl Segmenter {
             keep_room_share: self.options.snap_keep_room_share,
         };
         snap_to_colour_edges(frame, &mut mask, snapping, |rgb| {
-            self.gate.is_marker(self.lut.get(rgb))
+            self.gate.marker_index(self.lut.get(rgb))
         });
         times.refine = ms(started);
 

@@ -14,9 +14,10 @@
 //! keeps the label, and so does a person pixel of a colour the caller keeps (the segmenter keeps
 //! the suit's marker colours, since a marker on the outline is a sliver that the blur has already
 //! thinned and that the marker detector needs) — unless at least `room_share` of the background
-//! samples around it have a kept colour too: then the room beside the person is of a marker's hue
-//! (dark red coffee, a purple cushion), the colour says nothing about which side the pixel is on,
-//! and it is decided like any other. A marker on the outline blurs into a pixel or two of the room,
+//! samples around it have the same kept colour: then the room beside the person is of this
+//! marker's hue (dark red coffee beside a red marker, a purple cushion beside a purple one), the
+//! colour says nothing about which side the pixel is on, and it is decided like any other; a room
+//! of another marker's hue (sky blue under the cyan gate beside a purple marker) leaves it kept. A marker on the outline blurs into a pixel or two of the room,
 //! a few of the samples; a room of its hue fills most of them. Each pass decides all outline
 //! pixels from the same labels, then the next pass looks at the new outline; a pass that changes
 //! nothing ends it.
@@ -56,19 +57,20 @@ pub struct Snapping {
     /// Passes; each moves the outline by a pixel at most (0: none).
     pub passes: u32,
     /// Person pixels of a kept colour stay person unless at least this share of the background
-    /// samples around them have a kept colour too (above 1: they always stay).
+    /// samples around them have the same kept colour (above 1: they always stay).
     pub keep_room_share: f32,
 }
 
 /// Snaps `mask`'s outline to the colour edges of `frame` (see the module documentation) as
-/// `snapping` says; person pixels whose colour `keep` accepts stay person unless the room around
-/// them has such colours too ([`Snapping::keep_room_share`]). Returns how many pixels changed
-/// label, or `None` (and leaves the mask alone) when the frame and the mask differ in size.
+/// `snapping` says; person pixels of a colour the caller keeps (`kept_colour` gives its class, the
+/// segmenter's a marker colour's index) stay person unless the room around them has the same kept
+/// colour ([`Snapping::keep_room_share`]). Returns how many pixels changed label, or `None` (and
+/// leaves the mask alone) when the frame and the mask differ in size.
 pub fn snap_to_colour_edges(
     frame: &RgbImage,
     mask: &mut Mask,
     snapping: Snapping,
-    keep: impl Fn([u8; 3]) -> bool,
+    kept_colour: impl Fn([u8; 3]) -> Option<usize>,
 ) -> Option<usize> {
     let Snapping {
         radius,
@@ -136,19 +138,20 @@ pub fn snap_to_colour_edges(
             }
             let flips = if label[k] == 1 {
                 background < person
-                    && !(keep(rgb_of(c)) && {
+                    && !kept_colour(rgb_of(c)).is_some_and(|own| {
                         // Counted only here: few outline pixels are of a kept colour and would
                         // flip.
-                        let (mut samples, mut kept) = (0u32, 0u32);
+                        let (mut samples, mut alike) = (0u32, 0u32);
                         for qy in y.saturating_sub(r)..(y + r + 1).min(rh) {
                             for qx in from..to {
                                 if class[qy * rw + qx] == BACKGROUND {
                                     samples += 1;
-                                    kept += keep(rgb_of(colour(qx, qy))) as u32;
+                                    alike +=
+                                        (kept_colour(rgb_of(colour(qx, qy))) == Some(own)) as u32;
                                 }
                             }
                         }
-                        (kept as f32) < room_share * samples as f32
+                        (alike as f32) < room_share * samples as f32
                     })
             } else {
                 person < background
@@ -293,7 +296,7 @@ mod tests {
         // column 3; column 5 is the room itself.
         let mut wide = columns(5);
         assert_eq!(
-            snap_to_colour_edges(&frame, &mut wide, TWO_PASSES, |_| false),
+            snap_to_colour_edges(&frame, &mut wide, TWO_PASSES, |_| None),
             Some(3)
         );
         assert_eq!(wide, columns(4));
@@ -301,14 +304,14 @@ mod tests {
         // 0.3 mix; column 2 is the person itself.
         let mut narrow = columns(3);
         assert_eq!(
-            snap_to_colour_edges(&frame, &mut narrow, TWO_PASSES, |_| false),
+            snap_to_colour_edges(&frame, &mut narrow, TWO_PASSES, |_| None),
             Some(3)
         );
         assert_eq!(narrow, columns(4));
         // Right already: nothing moves.
         let mut right = columns(4);
         assert_eq!(
-            snap_to_colour_edges(&frame, &mut right, TWO_PASSES, |_| false),
+            snap_to_colour_edges(&frame, &mut right, TWO_PASSES, |_| None),
             Some(0)
         );
         assert_eq!(right, columns(4));
@@ -320,7 +323,9 @@ mod tests {
         let frame = blurred_edge();
         let kept = *frame.get_pixel(4, 0);
         let mut wide = columns(5);
-        let changed = snap_to_colour_edges(&frame, &mut wide, TWO_PASSES, |rgb| rgb == kept.0);
+        let changed = snap_to_colour_edges(&frame, &mut wide, TWO_PASSES, |rgb| {
+            (rgb == kept.0).then_some(0)
+        });
         assert_eq!(changed, Some(0));
         assert_eq!(wide, columns(5));
     }
@@ -330,13 +335,25 @@ mod tests {
         // As above, but the room (columns 5–7) has a kept colour too: column 4 goes back to it.
         let frame = blurred_edge();
         let kept = *frame.get_pixel(4, 0);
-        let keep = |rgb: [u8; 3]| rgb == kept.0 || rgb == ROOM_COLOUR;
+        let keep = |rgb: [u8; 3]| (rgb == kept.0 || rgb == ROOM_COLOUR).then_some(0);
         let mut wide = columns(5);
         assert_eq!(
             snap_to_colour_edges(&frame, &mut wide, TWO_PASSES, keep),
             Some(3)
         );
         assert_eq!(wide, columns(4));
+        // A room of another kept colour (another marker's hue) leaves the pixel kept.
+        let other = |rgb: [u8; 3]| match rgb {
+            rgb if rgb == kept.0 => Some(0),
+            ROOM_COLOUR => Some(1),
+            _ => None,
+        };
+        let mut wide = columns(5);
+        assert_eq!(
+            snap_to_colour_edges(&frame, &mut wide, TWO_PASSES, other),
+            Some(0)
+        );
+        assert_eq!(wide, columns(5));
         // Above 1 a kept colour always stays, whatever the room (the rule before the room test).
         let mut wide = columns(5);
         assert_eq!(
@@ -351,13 +368,13 @@ mod tests {
         let flat = RgbImage::from_pixel(8, 3, Rgb(SUIT));
         let mut mask = columns(5);
         assert_eq!(
-            snap_to_colour_edges(&flat, &mut mask, TWO_PASSES, |_| false),
+            snap_to_colour_edges(&flat, &mut mask, TWO_PASSES, |_| None),
             Some(0)
         );
         assert_eq!(mask, columns(5));
         let mut empty = Mask::empty(8, 3);
         assert_eq!(
-            snap_to_colour_edges(&blurred_edge(), &mut empty, TWO_PASSES, |_| false),
+            snap_to_colour_edges(&blurred_edge(), &mut empty, TWO_PASSES, |_| None),
             Some(0)
         );
         assert!(empty.is_empty());
@@ -368,7 +385,7 @@ mod tests {
         let mut mask = columns(5);
         let small = RgbImage::new(4, 3);
         assert_eq!(
-            snap_to_colour_edges(&small, &mut mask, TWO_PASSES, |_| false),
+            snap_to_colour_edges(&small, &mut mask, TWO_PASSES, |_| None),
             None
         );
         assert_eq!(mask, columns(5));
@@ -385,7 +402,7 @@ mod tests {
                     passes: 0,
                     ..TWO_PASSES
                 },
-                |_| false
+                |_| None
             ),
             Some(0)
         );
@@ -463,7 +480,7 @@ mod tests {
                 &frame,
                 &mut fast,
                 Snapping { radius, passes, ..TWO_PASSES },
-                |_| false,
+                |_| None,
             );
             let expected = snap_everywhere(&frame, &mut slow, radius as usize, passes);
             prop_assert_eq!(fast, slow);
