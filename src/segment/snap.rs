@@ -40,7 +40,10 @@
 //! Then, at 0.5, passes 3 / **4** / 6 gave 0.9585 / **0.9589** / 0.9592 (recall 0.9143 / **0.9138**
 //! / 0.9135, precision 0.9857 / **0.9863** / 0.9866) and radius 2 / 4 at two passes 0.9568 / 0.9571:
 //! with the rim gone, the outline has more than two pixels to travel in places. The two more
-//! passes cost about a quarter of a millisecond per frame at 640×480 and at 1440×1080.
+//! passes cost about a quarter of a millisecond per frame at 640×480 and at 1440×1080. Since the
+//! eleventh session only room samples of the pixel's own marker colour count (before, any marker
+//! colour did): the selection's IoU the same, the markers' recall over the nine 0.9137 → 0.9140; a
+//! drink over a sky-blue photograph 0.9624 → 0.9667.
 //!
 //! The snapped [`Mask`] goes on to marker detection like the refined one.
 
