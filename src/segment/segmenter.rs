@@ -30,8 +30,8 @@
 //!    [`SegmenterOptions::part_min_depth`]; a piece beside the suit, a hand, may not hang on by a
 //!    pixel or two of contact: [`SegmenterOptions::part_max_side_depth`]); a head that the band
 //!    joined to too much background is looked for again within a narrower band
-//!    ([`SegmenterOptions::part_reach_narrow`]); where
-//!    the previous frame attached a head or shoes, the part test leans towards the part
+//!    ([`SegmenterOptions::part_reach_narrow`]); where the previous frame attached a head or
+//!    shoes, the part test leans towards the part
 //!    ([`SegmenterOptions::part_memory`]), so a head over a room of its colour is not lost every
 //!    other frame; and the part test's colours mix the trained table (every training subject's
 //!    skin and shoes) with this person's own, learned from the heads and shoes attached in the
@@ -1124,8 +1124,9 @@ mod tests {
 
     #[test]
     fn the_hands_table_leans_on_the_persons_own_colours_at_its_own_share() {
-        // Two bins: training saw skin (bin 0) and the person's head shows only bin 1.
-        let trained = [0.5f32.ln().abs(), 0.5f32.ln().abs()];
+        // Two bins: the training subjects' parts fill both alike (p = 0.5 each), this person's
+        // head shows only bin 1.
+        let trained = [2f32.ln(), 2f32.ln()];
         let online = [0.0, 1.0];
         let (mut part, mut hand) = ([0.0; 2], [0.0; 2]);
         mix_part_tables(&trained, &online, (0.3, 0.75), (&mut part, &mut hand));

@@ -17,10 +17,10 @@
 //! samples around it have the same kept colour: then the room beside the person is of this
 //! marker's hue (dark red coffee beside a red marker, a purple cushion beside a purple one), the
 //! colour says nothing about which side the pixel is on, and it is decided like any other; a room
-//! of another marker's hue (sky blue under the cyan gate beside a purple marker) leaves it kept. A marker on the outline blurs into a pixel or two of the room,
-//! a few of the samples; a room of its hue fills most of them. Each pass decides all outline
-//! pixels from the same labels, then the next pass looks at the new outline; a pass that changes
-//! nothing ends it.
+//! of another marker's hue (sky blue under the cyan gate beside a purple marker) leaves it kept. A
+//! marker on the outline blurs into a pixel or two of the room, a few of the samples; a room of its
+//! hue fills most of them. Each pass decides all outline pixels from the same labels, then the next
+//! pass looks at the new outline; a pass that changes nothing ends it.
 //!
 //! Chosen on the default suit's *training* datasets (punch 02_05, dance 05_04, jumping jacks 13_30,
 //! drink 14_37; every eighth frame, the shipped tables, without the kept colours): the mean IoU
