@@ -386,18 +386,7 @@ impl BodyPart {
     /// Angle at which the arc length from θ = 0 is the fraction `s` of the perimeter at `u`.
     pub fn theta_for(&self, u: f32, s: f32) -> f32 {
         let r = self.radii_at(u);
-        let table = ellipse_arc_table(r.x, r.y);
-        let target = s.rem_euclid(1.0) * table[4 * ARC_STEPS];
-        let i = table
-            .partition_point(|&a| a < target)
-            .clamp(1, 4 * ARC_STEPS);
-        let (a0, a1) = (table[i - 1], table[i]);
-        let frac = if a1 > a0 {
-            (target - a0) / (a1 - a0)
-        } else {
-            0.0
-        };
-        (i as f32 - 1.0 + frac) * TAU / (4 * ARC_STEPS) as f32
+        theta_on(&ellipse_arc_table(r.x, r.y), s)
     }
 
     /// Triangle mesh: `around` segments around, rings about every `ring_spacing` cm, five rings per cap.
@@ -571,6 +560,46 @@ impl BodyPart {
         let u = cell.centre_u + a * half;
         self.surface_point(u, self.theta_for(u, cell.centre_s + b * ds))
     }
+
+    /// [`BodyPart::marker_point`] at every pair of `across` × `across` (row by row: `a` from the
+    /// first, `b` from the second), one cross-section's arc table per row.
+    pub fn marker_points(
+        &self,
+        suit: &SuitDefinition,
+        cell: &MarkerCell,
+        across: &[f32],
+    ) -> Vec<(Vec3, Vec3)> {
+        let half = suit.marker_size_cm * 0.5;
+        let ds = half / self.circumference_at(cell.centre_u);
+        let mut points = Vec::with_capacity(across.len() * across.len());
+        for &a in across {
+            let u = cell.centre_u + a * half;
+            let r = self.radii_at(u);
+            let table = ellipse_arc_table(r.x, r.y);
+            points.extend(
+                across
+                    .iter()
+                    .map(|&b| self.surface_point(u, theta_on(&table, cell.centre_s + b * ds))),
+            );
+        }
+        points
+    }
+}
+
+/// The angle at which the arc length from θ = 0 is the fraction `s` of the perimeter, on an
+/// ellipse's [`ellipse_arc_table`].
+fn theta_on(table: &[f32; 4 * ARC_STEPS + 1], s: f32) -> f32 {
+    let target = s.rem_euclid(1.0) * table[4 * ARC_STEPS];
+    let i = table
+        .partition_point(|&a| a < target)
+        .clamp(1, 4 * ARC_STEPS);
+    let (a0, a1) = (table[i - 1], table[i]);
+    let frac = if a1 > a0 {
+        (target - a0) / (a1 - a0)
+    } else {
+        0.0
+    };
+    (i as f32 - 1.0 + frac) * TAU / (4 * ARC_STEPS) as f32
 }
 
 /// Cumulative arc length of the ellipse (a cos θ, b sin θ) at θ = k·2π/(4·ARC_STEPS), k = 0..=4·ARC_STEPS.
@@ -1017,6 +1046,20 @@ mod tests {
             .map(|index| body.marker_grid(index, &s).cells().count())
             .sum();
         assert_eq!(printed_on_body, 54 - lost.len() + 12);
+    }
+
+    #[test]
+    fn a_markers_points_row_by_row_are_its_points_one_by_one() {
+        let part = cylinder();
+        let s = suit();
+        let m = part.markers(&s)[7 + 5];
+        let across = [-1.0, -0.25, 0.5, 1.0];
+        let points = part.marker_points(&s, &m, &across);
+        assert_eq!(points.len(), 16);
+        for (k, point) in points.iter().enumerate() {
+            let (a, b) = (across[k / 4], across[k % 4]);
+            assert_eq!(*point, part.marker_point(&s, &m, (a, b)), "({a}, {b})");
+        }
     }
 
     #[test]

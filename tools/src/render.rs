@@ -245,26 +245,25 @@ impl<'a> BodyRenderer<'a> {
         let centre = self.camera.project(transform.transform_point3(centre))?;
         let eye = self.camera.position();
         let n = VISIBILITY_SAMPLES;
-        let across = |k: usize| (2 * k + 1) as f32 / n as f32 - 1.0;
+        let across: Vec<f32> = (0..n)
+            .map(|k| (2 * k + 1) as f32 / n as f32 - 1.0)
+            .collect();
         let mut seen = 0;
-        for a in 0..n {
-            for b in 0..n {
-                let (point, normal) = p.marker_point(self.suit, cell, (across(a), across(b)));
-                let point = transform.transform_point3(point);
-                let normal = Vec3::from(transform.matrix3 * Vec3A::from(normal));
-                if (point - eye).dot(normal) >= 0.0 {
-                    continue;
-                }
-                let Some(projected) = self.camera.project(point) else {
-                    continue;
-                };
-                let (x, y) = (projected.pixel.x.floor(), projected.pixel.y.floor());
-                if x < 0.0 || y < 0.0 || x >= layer.width as f32 || y >= layer.height as f32 {
-                    continue;
-                }
-                let drawn = layer.depth.get(x as u32, y as u32);
-                seen += (projected.depth <= drawn + VISIBILITY_DEPTH_CM) as usize;
+        for (point, normal) in p.marker_points(self.suit, cell, &across) {
+            let point = transform.transform_point3(point);
+            let normal = Vec3::from(transform.matrix3 * Vec3A::from(normal));
+            if (point - eye).dot(normal) >= 0.0 {
+                continue;
             }
+            let Some(projected) = self.camera.project(point) else {
+                continue;
+            };
+            let (x, y) = (projected.pixel.x.floor(), projected.pixel.y.floor());
+            if x < 0.0 || y < 0.0 || x >= layer.width as f32 || y >= layer.height as f32 {
+                continue;
+            }
+            let drawn = layer.depth.get(x as u32, y as u32);
+            seen += (projected.depth <= drawn + VISIBILITY_DEPTH_CM) as usize;
         }
         Some((centre.pixel, seen as f32 / (n * n) as f32))
     }
