@@ -700,7 +700,10 @@ pub struct Component {
 }
 
 /// The share of a truth marker's area that must be visible for it to count for recall (the issue's
-/// "at least 60 % of their area visible").
+/// "at least 60 % of their area visible"). The generator measures it on the square's surface since
+/// the eleventh session of 2026-12-05; the figures in this module's documentation were measured
+/// with its earlier ratio, which counted markers wrapped round a limb's outline as wholly visible
+/// (`docs/measurements.md` has both).
 pub const COUNTED_VISIBLE_FRACTION: f32 = 0.6;
 /// The visible pixels a truth marker needs to count for recall: fewer make no centroid to find.
 pub const COUNTED_VISIBLE_PX: u32 = 6;
