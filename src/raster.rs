@@ -9,7 +9,7 @@
 //!
 //! # Method
 //!
-//! Coverage is defined by the f32 edge function [`edge`] of each of the three edges at the pixel
+//! Coverage is defined by the f32 edge function `edge` of each of the three edges at the pixel
 //! centre `(x + 0.5, y + 0.5)`: a pixel is covered when all three are positive, or zero on a top or
 //! left edge. The rasterizer draws exactly those pixels, but does not test them one by one. Per row
 //! of the bounding box:
@@ -18,9 +18,9 @@
 //!    a monotone function of x), so each edge admits a half-line of pixels and the three together an
 //!    interval `[start, end)`. Each edge's end of it is computed analytically, `⌊ax + 0.5 + row /
 //!    dy⌋` where the edge function crosses zero, and used as is when a rounding-error bound shows the
-//!    nearest pixel centres are safely on their sides ([`Edge::boundary`]). Otherwise (a vertex or
+//!    nearest pixel centres are safely on their sides (`Edge::boundary`). Otherwise (a vertex or
 //!    edge through a pixel centre, horizontal edges, the fill-rule ties) the boundary is found by
-//!    stepping from the estimate with the exact per-pixel test ([`Edge::walk`]). Either way the span
+//!    stepping from the estimate with the exact per-pixel test (`Edge::walk`). Either way the span
 //!    is exactly the pixel set the per-pixel test accepts; pixels outside it cost nothing.
 //! 2. **Depth.** `1/z = Σ λᵢ/zᵢ` (`λᵢ = eᵢ / area`) is linear in screen space. At the span's first
 //!    pixel it is evaluated from the exact edge values, as `min 1/zᵢ + Σ eᵢ · (1/zᵢ − min 1/zᵢ) /

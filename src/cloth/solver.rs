@@ -69,11 +69,11 @@
 //!      are swept `stretch_sweeps` times (6 live) within the one iteration: with a single sweep the
 //!      Gauss–Seidel error of a hanging garment (which grows like `N²·g·h²` over `N` edges) left
 //!      its edges 3–4 % long at rest. Within runs of 256 the constraints are reordered so that
-//!      neighbours share no vertex ([`interleave`]): projected in mesh order, each waited for the
+//!      neighbours share no vertex (`interleave`): projected in mesh order, each waited for the
 //!      square root and division of the one before, and the sweeps took two thirds of the frame;
 //!      interleaved, the processor overlaps them and a frame takes about half the time. Runs of
 //!      eight such vertex-disjoint neighbours are then projected at once, one per SIMD lane
-//!      ([`super::stretch`]; the positions are bit-identical to projecting them one by
+//!      (`super::stretch`; the positions are bit-identical to projecting them one by
 //!      one): with that, the SIMD box test in the collisions and the strain limit's SIMD scan,
 //!      the eight cases of `cargo bench --bench cloth` ran at 1.43× the frame rate (summed;
 //!      alternated runs of both builds on 2026-12-02, two each; 1.31× with blocks of four).
@@ -82,12 +82,12 @@
 //!      pump energy into crumpled regions (and on the kick they raised the worst frame's
 //!      95th-percentile strain, e.g. dress 2,000 vertices 2.29 → 2.70 %). Each projection computes
 //!      its correction `(l − l₀)/l` from `l²/l₀²` without a square root
-//!      ([`stretch_correction`](super::stretch::stretch_correction), a Padé approximant exact at
+//!      (`stretch::stretch_correction`, a Padé approximant exact at
 //!      rest and to second order; a sweep takes about an eighth less
 //!      time). The sweeps are accelerated with the Chebyshev semi-iterative method (Wang 2015, "A
 //!      Chebyshev semi-iterative approach for accelerating projective and position-based dynamics"):
 //!      after each sweep from the second on, the iterate is pushed on from the one two sweeps back
-//!      by a weight `ω` (1.39 at the second sweep, then about 1.27: [`chebyshev_weight`],
+//!      by a weight `ω` (1.39 at the second sweep, then about 1.27: `chebyshev_weight`,
 //!      `chebyshev_rho` = ρ = 0.75). Gauss–Seidel
 //!      removes the short-wavelength error in the first sweeps and the long-wavelength error slowly
 //!      (the corrections of successive plain sweeps shrink by 0.38, 0.54, 0.77, 0.87, 0.91 on the
@@ -110,7 +110,7 @@
 //!      them over a 6 cm ramp, because the body's hanging arms overlap its torso by several
 //!      centimetres and no cloth position is outside both. Arm cloth (a sleeve, a dress's armhole)
 //!      within 2 cm of the trunk may also lie inside an arm, from 6 cm deep on the trunk's
-//!      surface to nothing 2 cm off it ([`buried_arm_allowance`]): before, the trunk won on its
+//!      surface to nothing 2 cm off it (`buried_arm_allowance`): before, the trunk won on its
 //!      surface and the arm pushed everything else out at once, so where a lowered arm sank into
 //!      the chest one armpit vertex stayed on the trunk inside the arm while its neighbour, 3 mm
 //!      off the trunk, went out to the arm's far side. With the quality mode's 1 cm edges that
@@ -124,7 +124,7 @@
 //!      than at rest are found, projected back onto that bound four times, a vertex in contact
 //!      taking a fifth of its share (so the free cloth follows the cloth a capsule holds instead of
 //!      pulling it back in), and the vertices moved meet the capsules again; the round repeats
-//!      until no edge is outside the bound, at most six times ([`Cloth::limit_strain`]). The sixth
+//!      until no edge is outside the bound, at most six times (`Cloth::limit_strain`). The sixth
 //!      round meets the trunk only: where a sleeve (or a dress's armhole) ramps into an arm, the
 //!      arm's push moved one end of an edge further out than the other after the limit had set it
 //!      (on CMU 13_39's jump the 4,000-vertex dress kept 13.0 % and the quality T-shirt 11.1 %;
@@ -297,7 +297,7 @@ impl SolverSettings {
     /// linearly with the sweeps: on CMU walk 02_01 and kick 10_03 (`cargo bench --bench cloth`, 4,000
     /// vertices) the worst frame's 95th-percentile strain was 4.8 % (walk T-shirt) and 9.0 % (kick
     /// T-shirt) with 16 × 4, and 2.0 % and 2.6 % with 32 × 6. Since the constraints are interleaved
-    /// ([`interleave`]) 32 × 6 costs what 16 × 4 used to (about 12 ms a frame at 4,000 vertices).
+    /// (`interleave`) 32 × 6 costs what 16 × 4 used to (about 12 ms a frame at 4,000 vertices).
     ///
     /// At 32 × 6 the kick's worst frame was still 1.9–2.4 % in the four cases of the bench, and
     /// substeps, not sweeps, brought it down (T-shirt 2k / 4k, dress 2k / 4k): 32 × 12 gave 1.92 /

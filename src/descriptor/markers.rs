@@ -5,7 +5,7 @@
 //! so the yellowish-green cloth and dark or washed-out pixels are not markers), through one
 //! 256 KB table from the pixel's 6-bit-per-channel RGB to its label. Red's hue gate takes in skin:
 //! a pixel of such a colour that is as pale as skin and lies on skin's side of the colour's hue is
-//! only *weakly* of it ([`SKIN_PIXEL_MAX_SATURATION`], [`SKIN_SIDE_DEG`]). A weak pixel touching a
+//! only *weakly* of it (`SKIN_PIXEL_MAX_SATURATION`, `SKIN_SIDE_DEG`). A weak pixel touching a
 //! strongly coloured one joins it (a blurred rim); the others make weak components, which are
 //! markers only if no larger than a marker's square and not on the mask's edge with their colour
 //! running on or with more border outside the mask than in it (a marker seen at a slant, all its
@@ -681,7 +681,7 @@ pub enum Verdict {
     /// mask leaked onto and cut through, not a square printed on the suit.
     RunsOffMask,
     /// Only weakly of its colour throughout (as pale as skin, on skin's side of the colour's hue;
-    /// see [`SKIN_PIXEL_MAX_SATURATION`]) and larger than a marker's square or on the mask's edge:
+    /// see `SKIN_PIXEL_MAX_SATURATION`) and larger than a marker's square or on the mask's edge:
     /// a hand or a head, not a marker seen at a slant.
     SkinLike,
 }

@@ -7,7 +7,7 @@
 //! segmenter's masks), posed by the frame, is rasterized on a grid about 160 cells wide (a quarter
 //! of the resolution at 640 × 480; [`BodyMasker`]), and the integer shift within ±15 % of the image width that puts most model
 //! pixels on the (block-reduced) silhouette, less a cost growing with the square of the shift
-//! ([`SHIFT_PENALTY`]), is found coarse to fine; the root moves parallel to the
+//! (`SHIFT_PENALTY`), is found coarse to fine; the root moves parallel to the
 //! image plane by that shift × depth / focal length. Overlap, unlike aligning centroids, is not
 //! dragged by a segmentation leak or by legs leaving the picture: a leak adds the same pixels to
 //! every candidate shift that does not reach it. Depth is left alone: in one view it trades off
