@@ -555,29 +555,27 @@ impl BodyPart {
         cell: &MarkerCell,
         (a, b): (f32, f32),
     ) -> (Vec3, Vec3) {
-        let half = suit.marker_size_cm * 0.5;
-        let ds = half / self.circumference_at(cell.centre_u);
-        let u = cell.centre_u + a * half;
-        self.surface_point(u, self.theta_for(u, cell.centre_s + b * ds))
+        self.marker_points(suit, cell, &[a], &[b])[0]
     }
 
-    /// [`BodyPart::marker_point`] at every pair of `across` × `across` (row by row: `a` from the
-    /// first, `b` from the second), one cross-section's arc table per row.
+    /// [`BodyPart::marker_point`] at every pair of `along` × `around` (row by row: one row per
+    /// entry of `along`), with one cross-section's arc table per row.
     pub fn marker_points(
         &self,
         suit: &SuitDefinition,
         cell: &MarkerCell,
-        across: &[f32],
+        along: &[f32],
+        around: &[f32],
     ) -> Vec<(Vec3, Vec3)> {
         let half = suit.marker_size_cm * 0.5;
         let ds = half / self.circumference_at(cell.centre_u);
-        let mut points = Vec::with_capacity(across.len() * across.len());
-        for &a in across {
+        let mut points = Vec::with_capacity(along.len() * around.len());
+        for &a in along {
             let u = cell.centre_u + a * half;
             let r = self.radii_at(u);
             let table = ellipse_arc_table(r.x, r.y);
             points.extend(
-                across
+                around
                     .iter()
                     .map(|&b| self.surface_point(u, theta_on(&table, cell.centre_s + b * ds))),
             );
@@ -1049,16 +1047,20 @@ mod tests {
     }
 
     #[test]
-    fn a_markers_points_row_by_row_are_its_points_one_by_one() {
+    fn a_markers_points_lie_where_its_cell_says_row_by_row() {
         let part = cylinder();
         let s = suit();
         let m = part.markers(&s)[7 + 5];
-        let across = [-1.0, -0.25, 0.5, 1.0];
-        let points = part.marker_points(&s, &m, &across);
-        assert_eq!(points.len(), 16);
+        let (along, around) = ([-1.0, 0.5, 1.0], [-1.0, -0.25, 0.5, 1.0]);
+        let points = part.marker_points(&s, &m, &along, &around);
+        assert_eq!(points.len(), 12);
+        // Half the 4 cm side along the axis, and as a share of the perimeter round it.
+        let ds = 2.0 / part.circumference_at(m.centre_u);
         for (k, point) in points.iter().enumerate() {
-            let (a, b) = (across[k / 4], across[k % 4]);
-            assert_eq!(*point, part.marker_point(&s, &m, (a, b)), "({a}, {b})");
+            let (a, b) = (along[k / 4], around[k % 4]);
+            let u = m.centre_u + 2.0 * a;
+            let expected = part.surface_point(u, part.theta_for(u, m.centre_s + b * ds));
+            assert_eq!(*point, expected, "({a}, {b})");
         }
     }
 

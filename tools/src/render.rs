@@ -245,11 +245,10 @@ impl<'a> BodyRenderer<'a> {
         let centre = self.camera.project(transform.transform_point3(centre))?;
         let eye = self.camera.position();
         let n = VISIBILITY_SAMPLES;
-        let across: Vec<f32> = (0..n)
-            .map(|k| (2 * k + 1) as f32 / n as f32 - 1.0)
-            .collect();
+        let across: [f32; VISIBILITY_SAMPLES] =
+            std::array::from_fn(|k| (2 * k + 1) as f32 / n as f32 - 1.0);
         let mut seen = 0;
-        for (point, normal) in p.marker_points(self.suit, cell, &across) {
+        for (point, normal) in p.marker_points(self.suit, cell, &across, &across) {
             let point = transform.transform_point3(point);
             let normal = Vec3::from(transform.matrix3 * Vec3A::from(normal));
             if (point - eye).dot(normal) >= 0.0 {
