@@ -506,7 +506,7 @@ fn segmenter_options(
         if !(share.is_finite() && share >= 0.0) {
             bail!("--keep-room-share: {share} is not a finite share >= 0");
         }
-        options.snap_keep_room_share = share;
+        options.snap.keep_room_share = share;
     }
     Ok(options)
 }

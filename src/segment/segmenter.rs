@@ -40,7 +40,7 @@
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut; then moves the outline onto the frame's colour edge
 //!    in up to four passes, a marker-coloured outline pixel staying person unless the room beside
-//!    it has a marker's hue too ([`snap`](super::snap), [`SegmenterOptions::snap_keep_room_share`];
+//!    it has a marker's hue too ([`snap`](super::snap), [`SegmenterOptions::snap`];
 //!    its time is counted in the refinement's).
 //!
 //! A frame with nobody in it gives an empty mask. The mask goes to marker detection and the descriptors;
@@ -77,14 +77,11 @@ pub struct SegmenterOptions {
     pub refine_prior: f32,
     /// Widen the boundary band to the cells next to a label change, not only those across it.
     pub refine_wide: bool,
-    /// Passes of the edge snapping after the refinement (0: none; see [`snap`](super::snap)).
-    pub snap_passes: u32,
-    /// How far (pixels, chessboard) the edge snapping looks for the colours of both sides.
-    pub snap_radius: u32,
-    /// The edge snapping leaves an outline pixel of a marker's colour on the person unless at least
-    /// this share of the room's samples around it have a marker's colour too (above 1: always, as
-    /// before the tenth session of 2026-12-05; see [`snap`](super::snap)).
-    pub snap_keep_room_share: f32,
+    /// The edge snapping after the refinement (see [`snap`](super::snap)): four passes (0: none)
+    /// with samples within 3 pixels; an outline pixel of a marker's colour stays person unless at
+    /// least half of the room's samples around it have that marker's colour too
+    /// ([`Snapping::keep_room_share`]; above 1: always, as before the tenth session of 2026-12-05).
+    pub snap: Snapping,
     /// Share of the online background histogram that each new frame replaces (0 = no adaptation).
     pub adapt_rate: f32,
     /// Background pixels closer than this to the person (at the cut's resolution) are not learned.
@@ -202,9 +199,11 @@ impl Default for SegmenterOptions {
             max_hole_fraction: 0.001,
             refine_prior: 3.0,
             refine_wide: true,
-            snap_passes: 4,
-            snap_radius: 3,
-            snap_keep_room_share: 0.5,
+            snap: Snapping {
+                radius: 3,
+                passes: 4,
+                keep_room_share: 0.5,
+            },
             adapt_rate: 0.3,
             adapt_margin: 4,
             adapt_share: 0.7,
@@ -910,12 +909,7 @@ impl Segmenter {
 
         let started = Instant::now();
         let mut mask = self.refine(frame, &person, w, h);
-        let snapping = Snapping {
-            radius: self.options.snap_radius,
-            passes: self.options.snap_passes,
-            keep_room_share: self.options.snap_keep_room_share,
-        };
-        snap_to_colour_edges(frame, &mut mask, snapping, |rgb| {
+        snap_to_colour_edges(frame, &mut mask, self.options.snap, |rgb| {
             self.gate.marker_index(self.lut.get(rgb))
         });
         times.refine = ms(started);
