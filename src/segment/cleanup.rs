@@ -667,6 +667,16 @@ mod tests {
         }
     }
 
+    /// Limits that judge a piece by its area alone, and let none through: the tests set the areas
+    /// (and any depth rule) they look at.
+    const AREA_ONLY: PartLimits = PartLimits {
+        max_area: 0,
+        max_top_area: 0,
+        max_round_area: 0,
+        min_depth: 0.0,
+        max_side_depth: f32::INFINITY,
+    };
+
     fn grid(rows: &[&str]) -> (Vec<bool>, usize, usize) {
         let w = rows[0].len();
         (
@@ -796,10 +806,7 @@ mod tests {
         let (mut part, mut stack) = (Vec::new(), Vec::new());
         let limits = |max_area| PartLimits {
             max_area,
-            max_top_area: 0,
-            max_round_area: 0,
-            min_depth: 0.0,
-            max_side_depth: f32::INFINITY,
+            ..AREA_ONLY
         };
         let added = attach_parts(
             &mut person,
@@ -838,10 +845,8 @@ mod tests {
         let mut person = suit.clone();
         let deep = PartLimits {
             max_area: 10,
-            max_top_area: 0,
-            max_round_area: 0,
             min_depth: 1.5,
-            max_side_depth: f32::INFINITY,
+            ..AREA_ONLY
         };
         let added = attach_parts(&mut person, &band, w, h, like, deep, &mut part, &mut stack).added;
         assert_eq!(added, 2);
@@ -863,8 +868,7 @@ mod tests {
                 max_area: 4,
                 max_top_area: 4,
                 max_round_area,
-                min_depth: 0.0,
-                max_side_depth: f32::INFINITY,
+                ..AREA_ONLY
             };
             attach_from(&suit, &band, (w, h), |i| person[i], limits)
         };
@@ -912,10 +916,8 @@ mod tests {
         let attach = |max_side_depth| {
             let limits = PartLimits {
                 max_area: 5,
-                max_top_area: 0,
-                max_round_area: 0,
-                min_depth: 0.0,
                 max_side_depth,
+                ..AREA_ONLY
             };
             attach_from(&suit, &band, (w, h), |i| person[i], limits)
         };
@@ -942,8 +944,7 @@ mod tests {
                 max_area: 3,
                 max_top_area,
                 max_round_area: 3,
-                min_depth: 0.0,
-                max_side_depth: f32::INFINITY,
+                ..AREA_ONLY
             };
             attach_from(&suit, &band, (w, h), |i| person[i], limits)
         };
@@ -971,9 +972,7 @@ mod tests {
         let limits = PartLimits {
             max_area: 1,
             max_top_area: 4,
-            max_round_area: 0,
-            min_depth: 0.0,
-            max_side_depth: f32::INFINITY,
+            ..AREA_ONLY
         };
         let (mut part, mut stack, mut scratch) = (Vec::new(), Vec::new(), (Vec::new(), Vec::new()));
         // Within the wide band alone the head's piece (8 px) and the side piece (4 px) are too large.
