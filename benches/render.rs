@@ -9,7 +9,7 @@
 use std::f32::consts::{PI, TAU};
 use std::hint::black_box;
 
-use criterion::measurement::{Measurement, ValueFormatter, WallTime};
+use criterion::measurement::Measurement;
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
 use image::RgbImage;
@@ -19,39 +19,9 @@ use suitcap::cloth::Capsule;
 use suitcap::composite::{Compositor, TextStyle};
 use suitcap::render::{GarmentRenderer, RenderSettings};
 
-/// CPU time of the measuring thread (from `/proc/thread-self/schedstat`, in ns): the single-threaded
-/// cost, unaffected by other processes taking the machine's two cores in turn.
-struct ThreadCpu;
-
-fn thread_cpu_ns() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    text.split_whitespace().next()?.parse().ok()
-}
-
-impl Measurement for ThreadCpu {
-    type Intermediate = u64;
-    type Value = u64;
-
-    fn start(&self) -> u64 {
-        thread_cpu_ns().unwrap_or(0)
-    }
-    fn end(&self, start: u64) -> u64 {
-        thread_cpu_ns().unwrap_or(0).saturating_sub(start)
-    }
-    fn add(&self, a: &u64, b: &u64) -> u64 {
-        a + b
-    }
-    fn zero(&self) -> u64 {
-        0
-    }
-    fn to_f64(&self, value: &u64) -> f64 {
-        *value as f64
-    }
-    fn formatter(&self) -> &dyn ValueFormatter {
-        static WALL: WallTime = WallTime;
-        WALL.formatter()
-    }
-}
+#[path = "common/cpu_time.rs"]
+mod cpu_time;
+use cpu_time::{thread_cpu_ns, ThreadCpu};
 
 const CENTRE: Vec3 = Vec3::new(0.0, 120.0, 0.0);
 

@@ -887,31 +887,31 @@ impl Body {
     }
 }
 
+/// A test part: a suit-patterned cylinder of radius 10 cm, 30 cm straight along +Y from the
+/// origin, with two 10 cm caps.
+#[cfg(test)]
+pub(crate) fn test_cylinder() -> BodyPart {
+    BodyPart {
+        name: "test",
+        joint: 0,
+        start: Vec3::ZERO,
+        end: Vec3::new(0.0, 30.0, 0.0),
+        radii_start: Vec2::splat(10.0),
+        radii_end: Vec2::splat(10.0),
+        width_axis: Vec3::X,
+        cap: 1.0,
+        patterned_caps: [true, true],
+        material: Material::Suit,
+        surface: 2,
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    use super::test_cylinder as cylinder;
     use super::*;
+    use crate::suit::shipped_default as suit;
     use std::path::Path;
-
-    fn suit() -> SuitDefinition {
-        SuitDefinition::load_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"))
-            .expect("suit")
-    }
-
-    fn cylinder() -> BodyPart {
-        BodyPart {
-            name: "test",
-            joint: 0,
-            start: Vec3::ZERO,
-            end: Vec3::new(0.0, 30.0, 0.0),
-            radii_start: Vec2::splat(10.0),
-            radii_end: Vec2::splat(10.0),
-            width_axis: Vec3::X,
-            cap: 1.0,
-            patterned_caps: [true, true],
-            material: Material::Suit,
-            surface: 2,
-        }
-    }
 
     #[test]
     fn a_circle_has_perimeter_two_pi_r() {

@@ -1062,29 +1062,8 @@ pub fn encode_png(image: &RgbImage, dpi: f32) -> Result<Vec<u8>, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::{Vec2, Vec3};
-
-    fn suit() -> SuitDefinition {
-        SuitDefinition::load_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"))
-            .expect("suit")
-    }
-
-    /// The test cylinder of `body.rs`: radius 10 cm, 30 cm straight along +Y, two 10 cm caps.
-    fn cylinder() -> BodyPart {
-        BodyPart {
-            name: "test",
-            joint: 0,
-            start: Vec3::ZERO,
-            end: Vec3::new(0.0, 30.0, 0.0),
-            radii_start: Vec2::splat(10.0),
-            radii_end: Vec2::splat(10.0),
-            width_axis: Vec3::X,
-            cap: 1.0,
-            patterned_caps: [true, true],
-            material: Material::Suit,
-            surface: 2,
-        }
-    }
+    use crate::body::test_cylinder as cylinder;
+    use crate::suit::shipped_default as suit;
 
     /// The cylinder alone, as a body.
     fn lone_cylinder() -> Body {

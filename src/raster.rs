@@ -595,12 +595,137 @@ impl Setup {
     }
 }
 
+/// The rasterizer as it was before spans and incremental depth: every pixel of the bounding box
+/// tested with the three edge functions, λ = e / area, depth = 1 / Σ λᵢ/zᵢ (three divisions per
+/// covered pixel). Not for rendering: the tests check [`draw_triangle`](super::draw_triangle)
+/// against it fragment for fragment, and `cargo bench --bench raster` measures both.
+pub mod reference {
+    use super::*;
+
+    /// Draws one triangle as [`super::draw_triangle`] does, pixel by pixel.
+    pub fn draw_triangle(
+        buffer: &mut DepthBuffer,
+        vertices: [ScreenVertex; 3],
+        cull: Cull,
+        near: f32,
+        mut shade: impl FnMut(Fragment),
+    ) {
+        let [a, b, c] = vertices;
+        if [a, b, c].iter().any(|v| {
+            v.depth.is_nan()
+                || near.is_nan()
+                || v.depth < near
+                || !v.x.is_finite()
+                || !v.y.is_finite()
+        }) {
+            return;
+        }
+        let area = edge(a.x, a.y, b.x, b.y, c.x, c.y);
+        if area == 0.0 || !area.is_finite() {
+            return;
+        }
+        let front_facing = area < 0.0;
+        if cull == Cull::Back && !front_facing {
+            return;
+        }
+        let (v, order) = if area > 0.0 {
+            ([a, b, c], [0, 1, 2])
+        } else {
+            ([a, c, b], [0, 2, 1])
+        };
+        let area = area.abs();
+        let (w, h) = (buffer.width as f32, buffer.height as f32);
+        let min_x = v
+            .iter()
+            .map(|p| p.x)
+            .fold(f32::INFINITY, f32::min)
+            .floor()
+            .max(0.0);
+        let max_x = v
+            .iter()
+            .map(|p| p.x)
+            .fold(f32::NEG_INFINITY, f32::max)
+            .ceil()
+            .min(w);
+        let min_y = v
+            .iter()
+            .map(|p| p.y)
+            .fold(f32::INFINITY, f32::min)
+            .floor()
+            .max(0.0);
+        let max_y = v
+            .iter()
+            .map(|p| p.y)
+            .fold(f32::NEG_INFINITY, f32::max)
+            .ceil()
+            .min(h);
+        if min_x >= max_x || min_y >= max_y {
+            return;
+        }
+        let edges = [(1, 2), (2, 0), (0, 1)];
+        let top_left = edges.map(|(i, j)| is_top_left(v[i].x, v[i].y, v[j].x, v[j].y));
+        let inv_depth = v.map(|p| 1.0 / p.depth);
+        let width = buffer.width as usize;
+        for py in min_y as u32..max_y as u32 {
+            let cy = py as f32 + 0.5;
+            for px in min_x as u32..max_x as u32 {
+                let cx = px as f32 + 0.5;
+                let mut lambda = [0.0f32; 3];
+                let mut inside = true;
+                for (k, &(i, j)) in edges.iter().enumerate() {
+                    let e = edge(v[i].x, v[i].y, v[j].x, v[j].y, cx, cy);
+                    if e < 0.0 || (e == 0.0 && !top_left[k]) {
+                        inside = false;
+                        break;
+                    }
+                    lambda[k] = e / area;
+                }
+                if !inside {
+                    continue;
+                }
+                let inv_z =
+                    lambda[0] * inv_depth[0] + lambda[1] * inv_depth[1] + lambda[2] * inv_depth[2];
+                let depth = 1.0 / inv_z;
+                let index = py as usize * width + px as usize;
+                if depth >= buffer.depth[index] {
+                    continue;
+                }
+                buffer.depth[index] = depth;
+                let mut weights = [0.0f32; 3];
+                for k in 0..3 {
+                    weights[order[k]] = lambda[k] * inv_depth[k] * depth;
+                }
+                shade(Fragment {
+                    x: px,
+                    y: py,
+                    index,
+                    depth,
+                    weights,
+                    front_facing,
+                });
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn sv(x: f32, y: f32, depth: f32) -> ScreenVertex {
         ScreenVertex { x, y, depth }
+    }
+
+    /// The fragments [`reference::draw_triangle`] gives, in its order.
+    fn reference_fragments(
+        buffer: &mut DepthBuffer,
+        vertices: [ScreenVertex; 3],
+        cull: Cull,
+        near: f32,
+    ) -> Vec<Fragment> {
+        let mut out = Vec::new();
+        reference::draw_triangle(buffer, vertices, cull, near, |f| out.push(f));
+        out
     }
 
     fn covered(buffer: &DepthBuffer) -> Vec<(u32, u32)> {
@@ -771,132 +896,10 @@ mod tests {
             let (mut ours, mut theirs) = (DepthBuffer::new(8, 8), DepthBuffer::new(8, 8));
             let mut a = Vec::new();
             draw_triangle(&mut ours, tri, Cull::None, 0.0, |f| a.push(f));
-            let b = reference::fragments(&mut theirs, tri, Cull::None, 0.0);
+            let b = reference_fragments(&mut theirs, tri, Cull::None, 0.0);
             assert!(!b.is_empty());
             assert_eq!(a, b);
             assert_eq!(ours, theirs);
-        }
-    }
-
-    /// The rasterizer as it was before spans and incremental depth: every pixel of the bounding box
-    /// tested with the three edge functions, λ = e / area, depth = 1 / Σ λᵢ/zᵢ.
-    mod reference {
-        use super::super::*;
-
-        pub fn fragments(
-            buffer: &mut DepthBuffer,
-            vertices: [ScreenVertex; 3],
-            cull: Cull,
-            near: f32,
-        ) -> Vec<Fragment> {
-            let mut out = Vec::new();
-            draw_triangle(buffer, vertices, cull, near, |f| out.push(f));
-            out
-        }
-
-        fn draw_triangle(
-            buffer: &mut DepthBuffer,
-            vertices: [ScreenVertex; 3],
-            cull: Cull,
-            near: f32,
-            mut shade: impl FnMut(Fragment),
-        ) {
-            let [a, b, c] = vertices;
-            if [a, b, c].iter().any(|v| {
-                v.depth.is_nan()
-                    || near.is_nan()
-                    || v.depth < near
-                    || !v.x.is_finite()
-                    || !v.y.is_finite()
-            }) {
-                return;
-            }
-            let area = edge(a.x, a.y, b.x, b.y, c.x, c.y);
-            if area == 0.0 || !area.is_finite() {
-                return;
-            }
-            let front_facing = area < 0.0;
-            if cull == Cull::Back && !front_facing {
-                return;
-            }
-            let (v, order) = if area > 0.0 {
-                ([a, b, c], [0, 1, 2])
-            } else {
-                ([a, c, b], [0, 2, 1])
-            };
-            let area = area.abs();
-            let (w, h) = (buffer.width as f32, buffer.height as f32);
-            let min_x = v
-                .iter()
-                .map(|p| p.x)
-                .fold(f32::INFINITY, f32::min)
-                .floor()
-                .max(0.0);
-            let max_x = v
-                .iter()
-                .map(|p| p.x)
-                .fold(f32::NEG_INFINITY, f32::max)
-                .ceil()
-                .min(w);
-            let min_y = v
-                .iter()
-                .map(|p| p.y)
-                .fold(f32::INFINITY, f32::min)
-                .floor()
-                .max(0.0);
-            let max_y = v
-                .iter()
-                .map(|p| p.y)
-                .fold(f32::NEG_INFINITY, f32::max)
-                .ceil()
-                .min(h);
-            if min_x >= max_x || min_y >= max_y {
-                return;
-            }
-            let edges = [(1, 2), (2, 0), (0, 1)];
-            let top_left = edges.map(|(i, j)| is_top_left(v[i].x, v[i].y, v[j].x, v[j].y));
-            let inv_depth = v.map(|p| 1.0 / p.depth);
-            let width = buffer.width as usize;
-            for py in min_y as u32..max_y as u32 {
-                let cy = py as f32 + 0.5;
-                for px in min_x as u32..max_x as u32 {
-                    let cx = px as f32 + 0.5;
-                    let mut lambda = [0.0f32; 3];
-                    let mut inside = true;
-                    for (k, &(i, j)) in edges.iter().enumerate() {
-                        let e = edge(v[i].x, v[i].y, v[j].x, v[j].y, cx, cy);
-                        if e < 0.0 || (e == 0.0 && !top_left[k]) {
-                            inside = false;
-                            break;
-                        }
-                        lambda[k] = e / area;
-                    }
-                    if !inside {
-                        continue;
-                    }
-                    let inv_z = lambda[0] * inv_depth[0]
-                        + lambda[1] * inv_depth[1]
-                        + lambda[2] * inv_depth[2];
-                    let depth = 1.0 / inv_z;
-                    let index = py as usize * width + px as usize;
-                    if depth >= buffer.depth[index] {
-                        continue;
-                    }
-                    buffer.depth[index] = depth;
-                    let mut weights = [0.0f32; 3];
-                    for k in 0..3 {
-                        weights[order[k]] = lambda[k] * inv_depth[k] * depth;
-                    }
-                    shade(Fragment {
-                        x: px,
-                        y: py,
-                        index,
-                        depth,
-                        weights,
-                        front_facing,
-                    });
-                }
-            }
         }
     }
 
@@ -1007,7 +1010,7 @@ mod tests {
                 let mut theirs = buffer_from(&depths);
                 let mut got = Vec::new();
                 draw_triangle(&mut ours, tri, cull, near, |f| got.push(f));
-                let want = reference::fragments(&mut theirs, tri, cull, near);
+                let want = reference_fragments(&mut theirs, tri, cull, near);
                 prop_assert_eq!(got.len(), want.len(), "{:?}", tri);
                 for (g, w) in got.iter().zip(&want) {
                     prop_assert_eq!((g.x, g.y, g.index, g.front_facing), (w.x, w.y, w.index, w.front_facing));

@@ -423,6 +423,14 @@ pub fn splitmix64(mut x: u64) -> u64 {
     x ^ (x >> 31)
 }
 
+/// The shipped default suit (`suits/default/suit.toml`), for the unit tests of the modules that
+/// draw, print or detect its markers.
+#[cfg(test)]
+pub(crate) fn shipped_default() -> SuitDefinition {
+    SuitDefinition::load_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"))
+        .expect("the shipped default suit loads")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

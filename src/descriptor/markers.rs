@@ -872,12 +872,7 @@ pub fn score_markers(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::Path;
-
-    fn suit() -> SuitDefinition {
-        SuitDefinition::load_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"))
-            .expect("suit")
-    }
+    use crate::suit::shipped_default as suit;
 
     /// A 170-pixel-tall green person (so a 4 cm marker is 4 px wide) with three markers.
     fn fixture() -> (RgbImage, Mask) {

@@ -309,6 +309,7 @@ pub fn quantise(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::suit::shipped_default as suit;
 
     fn codebooks() -> Codebooks {
         let book = |k: usize, dim: usize| {
@@ -325,11 +326,6 @@ mod tests {
                 silhouette::SC_RADIAL * silhouette::SC_ANGULAR,
             ),
         }
-    }
-
-    fn suit() -> SuitDefinition {
-        SuitDefinition::load_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"))
-            .expect("suit")
     }
 
     /// A green 40 × 120 person with a 4 × 4 marker every 7 pixels, cycling through the three colours.

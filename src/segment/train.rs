@@ -504,6 +504,7 @@ pub fn train_segmenter(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::suit::shipped_default as suit;
 
     #[test]
     fn downscaled_mask_takes_the_majority_of_each_block() {
@@ -558,11 +559,6 @@ mod tests {
                 }
             })
             .collect()
-    }
-
-    fn suit() -> SuitDefinition {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default");
-        SuitDefinition::load_dir(&dir).expect("suit")
     }
 
     #[test]
