@@ -155,7 +155,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     worst.keep_if_above(q.strain_p95, k, c);
                 })?;
                 let sleeves = if mesh.cuffs.is_empty() {
-                    "no sleeves".to_string()
+                    format!(
+                        "no sleeves, waist {:.1} cm from its place (mean; most {:.1})",
+                        summary.belt_offset_mean_cm, summary.belt_offset_max_cm
+                    )
                 } else {
                     format!(
                         "sleeve ends ≤ {:.1} cm off the arm, {:.1} cm up it (mean; most {:.1})",

@@ -597,7 +597,7 @@ impl Setup {
 
 /// The rasterizer as it was before spans and incremental depth: every pixel of the bounding box
 /// tested with the three edge functions, λ = e / area, depth = 1 / Σ λᵢ/zᵢ (three divisions per
-/// covered pixel). Not for rendering: the tests check [`draw_triangle`](super::draw_triangle)
+/// covered pixel). Not for rendering: the tests check [`draw_triangle`]
 /// against it fragment for fragment, and `cargo bench --bench raster` measures both.
 pub mod reference {
     use super::*;
