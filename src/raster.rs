@@ -325,6 +325,47 @@ fn ceil_within(x: f32, limit: f32) -> i64 {
     t + i64::from((t as f32) < x)
 }
 
+/// A triangle that passed the tests every triangle goes through first: its vertices ordered so
+/// that their signed area is positive (`order` maps them back to the caller's), that area, and
+/// whether the caller's winding faces the camera.
+#[derive(Clone, Copy, Debug)]
+struct Oriented {
+    v: [ScreenVertex; 3],
+    order: [usize; 3],
+    area: f32,
+    front_facing: bool,
+}
+
+/// `None` for a triangle that draws nothing: a vertex nearer than `near` or not finite, no area,
+/// or facing away under [`Cull::Back`].
+fn orient(vertices: [ScreenVertex; 3], cull: Cull, near: f32) -> Option<Oriented> {
+    let [a, b, c] = vertices;
+    if [a, b, c].iter().any(|v| {
+        v.depth.is_nan() || near.is_nan() || v.depth < near || !v.x.is_finite() || !v.y.is_finite()
+    }) {
+        return None;
+    }
+    let area = edge(a.x, a.y, b.x, b.y, c.x, c.y);
+    if area == 0.0 || !area.is_finite() {
+        return None;
+    }
+    let front_facing = area < 0.0;
+    if cull == Cull::Back && !front_facing {
+        return None;
+    }
+    let (v, order) = if area > 0.0 {
+        ([a, b, c], [0, 1, 2])
+    } else {
+        ([a, c, b], [0, 2, 1])
+    };
+    Some(Oriented {
+        v,
+        order,
+        area: area.abs(),
+        front_facing,
+    })
+}
+
 /// Rasterizes one triangle. Triangles with a vertex nearer than `near` (or not finite) are skipped.
 /// `shade` is called for every covered pixel nearer than the depth buffer, which is then updated.
 pub fn draw_triangle(
@@ -334,28 +375,18 @@ pub fn draw_triangle(
     near: f32,
     shade: impl FnMut(Fragment),
 ) {
-    let [a, b, c] = vertices;
-    if [a, b, c].iter().any(|v| {
-        v.depth.is_nan() || near.is_nan() || v.depth < near || !v.x.is_finite() || !v.y.is_finite()
-    }) {
+    let Some(Oriented {
+        v,
+        order,
+        area,
+        front_facing,
+    }) = orient(vertices, cull, near)
+    else {
         return;
-    }
-    let area = edge(a.x, a.y, b.x, b.y, c.x, c.y);
-    if area == 0.0 || !area.is_finite() {
-        return;
-    }
-    let front_facing = area < 0.0;
-    if cull == Cull::Back && !front_facing {
-        return;
-    }
-    // Order the vertices so the signed area is positive; `order` maps back to the caller's vertices.
-    let (v, order) = if area > 0.0 {
-        ([a, b, c], [0, 1, 2])
-    } else {
-        ([a, c, b], [0, 2, 1])
     };
-    let area_positive = area > 0.0;
-    let area = area.abs();
+    let [a, b, c] = vertices;
+    // The caller's signed area is positive where its winding faces away from the camera.
+    let area_positive = !front_facing;
 
     let (w, h) = (buffer.width as f32, buffer.height as f32);
     let min_x = floor_within(a.x.min(b.x).min(c.x), w).max(0);
@@ -610,30 +641,15 @@ pub mod reference {
         near: f32,
         mut shade: impl FnMut(Fragment),
     ) {
-        let [a, b, c] = vertices;
-        if [a, b, c].iter().any(|v| {
-            v.depth.is_nan()
-                || near.is_nan()
-                || v.depth < near
-                || !v.x.is_finite()
-                || !v.y.is_finite()
-        }) {
+        let Some(Oriented {
+            v,
+            order,
+            area,
+            front_facing,
+        }) = orient(vertices, cull, near)
+        else {
             return;
-        }
-        let area = edge(a.x, a.y, b.x, b.y, c.x, c.y);
-        if area == 0.0 || !area.is_finite() {
-            return;
-        }
-        let front_facing = area < 0.0;
-        if cull == Cull::Back && !front_facing {
-            return;
-        }
-        let (v, order) = if area > 0.0 {
-            ([a, b, c], [0, 1, 2])
-        } else {
-            ([a, c, b], [0, 2, 1])
         };
-        let area = area.abs();
         let (w, h) = (buffer.width as f32, buffer.height as f32);
         let min_x = v
             .iter()
