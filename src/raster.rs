@@ -628,8 +628,8 @@ impl Setup {
 
 /// The rasterizer as it was before spans and incremental depth: every pixel of the bounding box
 /// tested with the three edge functions, λ = e / area, depth = 1 / Σ λᵢ/zᵢ (three divisions per
-/// covered pixel). Not for rendering: the tests check [`draw_triangle`]
-/// against it fragment for fragment, and `cargo bench --bench raster` measures both.
+/// covered pixel). Not for rendering: the tests check [`draw_triangle`] against it fragment for
+/// fragment, and `cargo bench --bench raster` measures both.
 pub mod reference {
     use super::*;
 
