@@ -375,10 +375,10 @@ fn blend_online(online: &mut Option<Vec<f32>>, histogram: Vec<f32>, rate: f32) -
     online.as_deref().unwrap_or_default()
 }
 
-/// `−ln((1 − share)·e^(−trained_nll) + online_part)`, a probability floored at 1e-6: a trained
-/// table's entry mixed with an online histogram's (`online_part`: its value times `share`).
-fn mixed_nll(trained_nll: f32, share: f32, online_part: f32) -> f32 {
-    let p = (1.0 - share) * (-trained_nll).exp() + online_part;
+/// `−ln((1 − share)·e^(−trained_nll) + share·online)`, a probability floored at 1e-6: a trained
+/// table's entry mixed with an online histogram's (`online`, a probability).
+fn mixed_nll(trained_nll: f32, share: f32, online: f32) -> f32 {
+    let p = (1.0 - share) * (-trained_nll).exp() + share * online;
     -(p.max(1e-6)).ln()
 }
 
@@ -393,7 +393,7 @@ fn mix_part_tables(
 ) {
     for (table, share) in [(part, part_share), (hand, hand_share)] {
         for ((v, &nll), &p) in table.iter_mut().zip(trained).zip(online) {
-            *v = mixed_nll(nll, share, share * p);
+            *v = mixed_nll(nll, share, p);
         }
     }
 }
@@ -567,13 +567,13 @@ impl Segmenter {
             #[allow(clippy::needless_range_loop)]
             for bin in 0..COLOUR_BINS {
                 let k = class * COLOUR_BINS + bin;
-                let online_part = share * online[bin] * self.background_pattern[class];
-                self.background_colour[k] = mixed_nll(self.tables.colour[0][k], share, online_part);
+                let online_p = online[bin] * self.background_pattern[class];
+                self.background_colour[k] = mixed_nll(self.tables.colour[0][k], share, online_p);
             }
         }
         let trained = &self.trained_background_bin;
         for (bin, v) in self.background_bin.iter_mut().enumerate() {
-            *v = mixed_nll(trained[bin], share, share * online[bin]);
+            *v = mixed_nll(trained[bin], share, online[bin]);
         }
     }
 
@@ -1141,7 +1141,7 @@ mod tests {
         assert!((mixed_nll(2.0, 0.0, 0.0) - 2.0).abs() < 1e-6);
         assert!((mixed_nll(2.0, 1.0, 0.5) - 2.0f32.ln()).abs() < 1e-6);
         // Half of e^0 = 1 and half of 0.5 of the online: p = 0.5 + 0.25 = 0.75.
-        assert!((mixed_nll(0.0, 0.5, 0.25) + 0.75f32.ln()).abs() < 1e-6);
+        assert!((mixed_nll(0.0, 0.5, 0.5) + 0.75f32.ln()).abs() < 1e-6);
         // Nothing in either: the floor, 1e-6.
         assert!((mixed_nll(f32::INFINITY, 0.5, 0.0) + 1e-6f32.ln()).abs() < 1e-3);
     }
