@@ -144,7 +144,9 @@ pub struct MarkerRecord {
     /// Share of the marker's printed square that faces the camera unoccluded, in [0, 1] (the
     /// generator samples its surface; before the eleventh session of 2026-12-05 it divided the
     /// visible pixels by the flat square's projected area, capped at 1, which counted a marker
-    /// wrapped round a limb's outline as wholly visible).
+    /// wrapped round a limb's outline as wholly visible; before the first session of 2026-12-06
+    /// it counted the part of a square inside another part, where two parts' capsules cross,
+    /// as seen).
     pub visible_fraction: f32,
     /// Visible area in pixels (a marker seen edge-on can be wholly visible and one pixel large).
     pub visible_px: u32,

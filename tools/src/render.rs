@@ -18,7 +18,7 @@ use image::{GrayImage, RgbImage};
 use rand::Rng;
 use rand_distr::StandardNormal;
 
-use suitcap::body::{Body, MarkerCell, MarkerGrid, Material, PartMesh, Subject};
+use suitcap::body::{Body, BodyPart, MarkerCell, MarkerGrid, Material, PartMesh, Subject};
 use suitcap::camera::Camera;
 use suitcap::raster::{draw_triangle, Cull, DepthBuffer, ScreenVertex};
 use suitcap::suit::SuitDefinition;
@@ -34,6 +34,10 @@ pub const VISIBILITY_SAMPLES: usize = 8;
 /// what is seen there: the drawn mesh's chords lie up to a few millimetres inside the curved
 /// surface the points are taken on, an arm in front of the chest is centimetres nearer.
 pub const VISIBILITY_DEPTH_CM: f32 = 1.0;
+
+/// How far from another part a marker's centre may lie for its square to be tested against that
+/// part's inside, cm: more than the 2.9 cm from a 4 cm square's centre to its corners.
+const BURIED_SEARCH_CM: f32 = 3.0;
 
 /// Lighting of the body for one frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -100,8 +104,8 @@ pub struct VisibleMarker {
     pub colour: usize,
     /// Projected centre, pixels.
     pub centre: Vec2,
-    /// Share of the marker's square that faces the camera unoccluded (see
-    /// [`VISIBILITY_SAMPLES`]): 4 × 4 cm of surface, however foreshortened.
+    /// Share of the marker's square that faces the camera unoccluded and not inside another part
+    /// (see [`VISIBILITY_SAMPLES`]): 4 × 4 cm of surface, however foreshortened.
     pub visible_fraction: f32,
     /// Visible pixels.
     pub visible_px: u32,
@@ -229,12 +233,16 @@ impl<'a> BodyRenderer<'a> {
 
     /// A marker's projected centre and the share of its square the camera sees: of
     /// [`VISIBILITY_SAMPLES`]² points spread evenly over the square on the body's surface, those
-    /// that face the camera and lie no more than [`VISIBILITY_DEPTH_CM`] behind what `layer` drew
-    /// at their pixel (not behind an arm in front, another part, or round the far side of their
-    /// own limb). `None` when its centre is behind the camera.
+    /// that face the camera, lie no more than [`VISIBILITY_DEPTH_CM`] behind what `layer` drew at
+    /// their pixel (not behind an arm in front, another part, or round the far side of their own
+    /// limb) and not inside another part (`to_joint`: each joint's world-to-joint transform).
+    /// Where two parts' capsules cross (an upper arm pressed into the chest, a bent elbow) both
+    /// surfaces are drawn within a centimetre of each other along the seam, and a square of each
+    /// would count as seen at nearly the same pixels; on flesh, the square under the arm is
+    /// covered. `None` when its centre is behind the camera.
     fn marker_visibility(
         &self,
-        world: &[Affine3A],
+        (world, to_joint): (&[Affine3A], &[Affine3A]),
         part: usize,
         cell: &MarkerCell,
         layer: &BodyLayer,
@@ -242,7 +250,24 @@ impl<'a> BodyRenderer<'a> {
         let p = &self.body.parts[part];
         let transform = world[p.joint];
         let (centre, _) = p.marker_point(self.suit, cell, (0.0, 0.0));
-        let centre = self.camera.project(transform.transform_point3(centre))?;
+        let centre_world = transform.transform_point3(centre);
+        // The other parts near enough to the square to hold some of it (its corners are within
+        // 2.9 cm of its centre).
+        let near: Vec<&BodyPart> = self
+            .body
+            .parts
+            .iter()
+            .enumerate()
+            .filter(|&(k, other)| {
+                k != part
+                    && other.contains(
+                        to_joint[other.joint].transform_point3(centre_world),
+                        BURIED_SEARCH_CM,
+                    )
+            })
+            .map(|(_, other)| other)
+            .collect();
+        let centre = self.camera.project(centre_world)?;
         let eye = self.camera.position();
         let n = VISIBILITY_SAMPLES;
         let across: [f32; VISIBILITY_SAMPLES] =
@@ -262,7 +287,10 @@ impl<'a> BodyRenderer<'a> {
                 continue;
             }
             let drawn = layer.depth.get(x as u32, y as u32);
-            seen += (projected.depth <= drawn + VISIBILITY_DEPTH_CM) as usize;
+            let buried = near
+                .iter()
+                .any(|other| other.contains(to_joint[other.joint].transform_point3(point), 0.0));
+            seen += (projected.depth <= drawn + VISIBILITY_DEPTH_CM && !buried) as usize;
         }
         Some((centre.pixel, seen as f32 / (n * n) as f32))
     }
@@ -275,13 +303,16 @@ impl<'a> BodyRenderer<'a> {
                 counts[m as usize] += 1;
             }
         }
+        let to_joint: Vec<Affine3A> = world.iter().map(|t| t.inverse()).collect();
         let mut out = Vec::new();
         for (k, &count) in counts.iter().enumerate() {
             if count == 0 {
                 continue;
             }
             let (part, cell) = &self.markers[k];
-            let Some((centre, fraction)) = self.marker_visibility(world, *part, cell, layer) else {
+            let Some((centre, fraction)) =
+                self.marker_visibility((world, &to_joint), *part, cell, layer)
+            else {
                 continue;
             };
             out.push(VisibleMarker {
@@ -398,6 +429,7 @@ mod tests {
     use suitcap::body::SUBJECTS;
     use suitcap::bvh::Motion;
     use suitcap::camera::Intrinsics;
+    use suitcap::skeleton::{Channel, Joint, Skeleton};
 
     fn repo(path: &str) -> std::path::PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(path)
@@ -618,6 +650,75 @@ mod tests {
             facing > 10 && outline > 3,
             "{facing} facing, {outline} on the outline"
         );
+    }
+
+    #[test]
+    fn a_marker_inside_another_part_is_not_seen_even_with_nothing_drawn_in_front() {
+        // A suit cylinder (radius 10 cm, 30 cm along +Y) seen from +Z with an empty depth layer, so
+        // only the test against other parts can hide a sample. A bar of radius 5 cm along X
+        // through the centre of a marker facing the camera covers its whole square (its corners
+        // lie within 2.1 cm of the bar's axis): none of it is seen; the marker two rows (14 cm)
+        // below, at least 12 cm from the bar's axis: all of it is seen.
+        let suit = SuitDefinition::load_dir(&repo("suits/default")).expect("suit");
+        let part = |name, start, end, radius| BodyPart {
+            name,
+            joint: 0,
+            start,
+            end,
+            radii_start: Vec2::splat(radius),
+            radii_end: Vec2::splat(radius),
+            width_axis: Vec3::X,
+            cap: 1.0,
+            patterned_caps: [true, true],
+            material: Material::Suit,
+            surface: 0,
+        };
+        let cylinder = part("cylinder", Vec3::ZERO, Vec3::Y * 30.0, 10.0);
+        // The markers of the column facing 22.5° right of the camera, at heights 1, 8, 15, 22 and
+        // 29 cm: the one at 15 and the one two rows (14 cm) below it.
+        let column: Vec<(MarkerCell, Vec3)> = cylinder
+            .marker_grid(&suit)
+            .cells()
+            .filter_map(|cell| {
+                let (point, normal) = cylinder.marker_point(&suit, &cell, (0.0, 0.0));
+                (normal.z > 0.9 && normal.x > 0.0).then_some((cell, point))
+            })
+            .collect();
+        let at = |y: f32| {
+            *column
+                .iter()
+                .find(|(_, p)| (p.y - y).abs() < 0.5)
+                .expect("a marker at that height")
+        };
+        let ((covered, centre), (clear, _)) = (at(15.0), at(1.0));
+        let bar = part("bar", centre - Vec3::X * 20.0, centre + Vec3::X * 20.0, 5.0);
+        let skeleton = Skeleton::new(vec![Joint {
+            name: "world".into(),
+            parent: None,
+            offset: Vec3::ZERO,
+            channels: vec![Channel::Xposition, Channel::Yposition, Channel::Zposition],
+            first_channel: 0,
+            end_site: None,
+        }])
+        .expect("skeleton");
+        let body = Body::from_parts(vec![cylinder, bar], &skeleton);
+        let camera = Camera::look_at(
+            Intrinsics::from_fov(320, 240, 40.0),
+            Vec3::new(0.0, 15.0, 300.0),
+            Vec3::new(0.0, 15.0, 0.0),
+            Vec3::Y,
+        );
+        let renderer = BodyRenderer::new(&suit, &SUBJECTS[0], &body, camera);
+        let layer = BodyLayer::new(320, 240);
+        let world = [Affine3A::IDENTITY];
+        let seen = |cell: &MarkerCell| {
+            renderer
+                .marker_visibility((&world, &world), 0, cell, &layer)
+                .expect("in front of the camera")
+                .1
+        };
+        assert_eq!(seen(&covered), 0.0);
+        assert_eq!(seen(&clear), 1.0);
     }
 
     #[test]
