@@ -9,7 +9,7 @@
 //! the 8-bit frame. The ground-truth mask is the set of pixels the body covers before blur;
 //! [`BodyRenderer::visible_markers`] reports each visible marker's projected centre and the share of
 //! its square that faces the camera unoccluded (sampled on the body's surface and tested against the
-//! layer's depth).
+//! layer's depth and against the inside of the other parts).
 
 use std::collections::HashMap;
 
