@@ -377,9 +377,9 @@ pub fn draw_triangle(
 ) {
     let Some(Oriented {
         v,
-        order,
         area,
         front_facing,
+        ..
     }) = orient(vertices, cull, near)
     else {
         return;
@@ -431,18 +431,9 @@ pub fn draw_triangle(
     if sane {
         spans.draw(buffer, bounds, shade);
     } else {
-        let tri = Setup {
-            edges,
-            area,
-            order,
-            front_facing,
-        };
-        let inv_depth = [
-            inv_depth[order[0]],
-            inv_depth[order[1]],
-            inv_depth[order[2]],
-        ];
-        tri.draw_each_pixel(buffer, bounds, inv_depth, shade);
+        // Extreme input (huge coordinates, absurd depths): every pixel of the bounding box tested
+        // on its own.
+        reference::draw_triangle(buffer, vertices, cull, near, shade);
     }
 }
 
@@ -568,68 +559,11 @@ impl Spans {
     }
 }
 
-/// A positively wound triangle for the per-pixel path; `order` maps its vertices back to the
-/// caller's.
-struct Setup {
-    edges: [Edge; 3],
-    area: f32,
-    order: [usize; 3],
-    front_facing: bool,
-}
-
-impl Setup {
-    /// The slow path for extreme input (huge coordinates, absurd depths): every pixel of the
-    /// bounding box tested on its own, as the rasterizer always did.
-    #[cold]
-    fn draw_each_pixel(
-        &self,
-        buffer: &mut DepthBuffer,
-        bounds: Bounds,
-        inv_depth: [f32; 3],
-        mut shade: impl FnMut(Fragment),
-    ) {
-        let width = buffer.width as usize;
-        for py in bounds.y.0..bounds.y.1 {
-            let cy = py as f32 + 0.5;
-            'pixel: for px in bounds.x.0..bounds.x.1 {
-                let cx = px as f32 + 0.5;
-                let mut lambda = [0.0f32; 3];
-                for (k, e) in self.edges.iter().enumerate() {
-                    let value = e.at(e.row(cy), cx);
-                    if value < 0.0 || (value == 0.0 && !e.top_left) {
-                        continue 'pixel;
-                    }
-                    lambda[k] = value / self.area;
-                }
-                let inv_z =
-                    lambda[0] * inv_depth[0] + lambda[1] * inv_depth[1] + lambda[2] * inv_depth[2];
-                let depth = 1.0 / inv_z;
-                let index = py as usize * width + px as usize;
-                if depth >= buffer.depth[index] {
-                    continue;
-                }
-                buffer.depth[index] = depth;
-                let mut weights = [0.0f32; 3];
-                for k in 0..3 {
-                    weights[self.order[k]] = lambda[k] * inv_depth[k] * depth;
-                }
-                shade(Fragment {
-                    x: px,
-                    y: py,
-                    index,
-                    depth,
-                    weights,
-                    front_facing: self.front_facing,
-                });
-            }
-        }
-    }
-}
-
 /// The rasterizer as it was before spans and incremental depth: every pixel of the bounding box
 /// tested with the three edge functions, λ = e / area, depth = 1 / Σ λᵢ/zᵢ (three divisions per
-/// covered pixel). Not for rendering: the tests check [`draw_triangle`] against it fragment for
-/// fragment, and `cargo bench --bench raster` measures both.
+/// covered pixel). [`draw_triangle`] falls back to it for extreme input (coordinates beyond 1e18,
+/// 1/z beyond 1e-30..1e30), where its incremental spans could overflow; the tests check the spans
+/// against it fragment for fragment, and `cargo bench --bench raster` measures both.
 pub mod reference {
     use super::*;
 
@@ -650,31 +584,15 @@ pub mod reference {
         else {
             return;
         };
-        let (w, h) = (buffer.width as f32, buffer.height as f32);
-        let min_x = v
-            .iter()
-            .map(|p| p.x)
-            .fold(f32::INFINITY, f32::min)
-            .floor()
-            .max(0.0);
-        let max_x = v
-            .iter()
-            .map(|p| p.x)
-            .fold(f32::NEG_INFINITY, f32::max)
-            .ceil()
-            .min(w);
-        let min_y = v
-            .iter()
-            .map(|p| p.y)
-            .fold(f32::INFINITY, f32::min)
-            .floor()
-            .max(0.0);
-        let max_y = v
-            .iter()
-            .map(|p| p.y)
-            .fold(f32::NEG_INFINITY, f32::max)
-            .ceil()
-            .min(h);
+        // The pixel rows or columns `[floor(min), ceil(max))` the three coordinates span,
+        // clipped to `[0, limit]`.
+        let span = |c: [f32; 3], limit: f32| {
+            let lo = c.iter().copied().fold(f32::INFINITY, f32::min);
+            let hi = c.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            (lo.floor().max(0.0), hi.ceil().min(limit))
+        };
+        let (min_x, max_x) = span(v.map(|p| p.x), buffer.width as f32);
+        let (min_y, max_y) = span(v.map(|p| p.y), buffer.height as f32);
         if min_x >= max_x || min_y >= max_y {
             return;
         }
