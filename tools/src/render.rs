@@ -287,10 +287,11 @@ impl<'a> BodyRenderer<'a> {
                 continue;
             }
             let drawn = layer.depth.get(x as u32, y as u32);
-            let buried = near
-                .iter()
-                .any(|other| other.contains(to_joint[other.joint].transform_point3(point), 0.0));
-            seen += (projected.depth <= drawn + VISIBILITY_DEPTH_CM && !buried) as usize;
+            let buried = || {
+                near.iter()
+                    .any(|other| other.contains(to_joint[other.joint].transform_point3(point), 0.0))
+            };
+            seen += (projected.depth <= drawn + VISIBILITY_DEPTH_CM && !buried()) as usize;
         }
         Some((centre.pixel, seen as f32 / (n * n) as f32))
     }
@@ -468,6 +469,15 @@ mod tests {
         }
     }
 
+    /// The fixture's body drawn by a renderer for the first subject, into a layer of the
+    /// camera's size.
+    fn drawn(f: &Fixture) -> (BodyRenderer<'_>, BodyLayer) {
+        let renderer = BodyRenderer::new(&f.suit, &SUBJECTS[0], &f.body, f.camera);
+        let mut layer = BodyLayer::new(f.camera.intrinsics.width, f.camera.intrinsics.height);
+        renderer.draw(&f.world, &lighting(), &mut layer);
+        (renderer, layer)
+    }
+
     fn lighting() -> Lighting {
         Lighting {
             direction: Vec3::new(0.3, 1.0, 0.5).normalize(),
@@ -496,10 +506,7 @@ mod tests {
     fn mask_equals_the_pixels_a_ray_cast_finds_on_the_body() {
         let (w, h) = (120, 90);
         let f = fixture(w, h);
-        let subject = &SUBJECTS[0];
-        let renderer = BodyRenderer::new(&f.suit, subject, &f.body, f.camera);
-        let mut layer = BodyLayer::new(w, h);
-        renderer.draw(&f.world, &lighting(), &mut layer);
+        let (_, layer) = drawn(&f);
         let mask = layer.mask();
         // Independent check: cast a ray through every pixel centre against every body triangle.
         let triangles: Vec<[Vec3; 3]> = f
@@ -540,9 +547,7 @@ mod tests {
     fn a_marker_appears_at_its_projected_place_in_its_colour() {
         let (w, h) = (640, 480);
         let f = fixture(w, h);
-        let renderer = BodyRenderer::new(&f.suit, &SUBJECTS[0], &f.body, f.camera);
-        let mut layer = BodyLayer::new(w, h);
-        renderer.draw(&f.world, &lighting(), &mut layer);
+        let (renderer, layer) = drawn(&f);
         let visible = renderer.visible_markers(&f.world, &layer);
         let mut checked = 0;
         for m in visible.iter().filter(|m| m.visible_fraction > 0.95) {
@@ -597,9 +602,7 @@ mod tests {
     fn a_marker_facing_the_camera_is_wholly_visible_and_one_on_the_outline_about_half() {
         let (w, h) = (640, 480);
         let f = fixture(w, h);
-        let renderer = BodyRenderer::new(&f.suit, &SUBJECTS[0], &f.body, f.camera);
-        let mut layer = BodyLayer::new(w, h);
-        renderer.draw(&f.world, &lighting(), &mut layer);
+        let (renderer, layer) = drawn(&f);
         let eye = f.camera.position();
         let (mut facing, mut outline) = (0, 0);
         for m in renderer.visible_markers(&f.world, &layer) {
