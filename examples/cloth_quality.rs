@@ -17,7 +17,9 @@
 //! `CLOTH_COUNTS` (vertex counts, e.g. `2500,3300`), `CLOTH_MATERIAL` (a preset name, default
 //! medium). `CLOTH_MODE=quality`: the quality mode of `suitcap run` / `drape` instead (its
 //! substeps, and the garment at its 1 cm edges instead of the vertex counts). `CLOTH_CLIP`: another
-//! BVH file instead of the two clips, from its first frame; `CLOTH_SUBJECT`: another built-in
+//! BVH file instead of the two clips, from the end of its calibration lead-in (the first six
+//! frames of a raw CMU capture at 120 frames/s, none of a 30 frames/s clip; `CLOTH_FIRST_FRAME`
+//! to choose); `CLOTH_SUBJECT`: another built-in
 //! subject than chidi, or `motion` for the clip's own skeleton at girth 1 (what `suitcap drape`
 //! wears without masks). `CLOTH_GARMENTS`: other garments than the T-shirt and the dress, e.g.
 //! `skirt`. The frames/s printed are from `run_motion`'s
@@ -37,7 +39,20 @@ use suitcap::cloth::proxies::{BodyRig, DEFAULT_MARGIN_CM};
 use suitcap::cloth::solver::{run_motion, Cloth, SolverSettings};
 use suitcap::cloth::topology::unique_edges;
 
-const FIRST_FRAME: usize = 6;
+/// The raw CMU clips (120 frames/s) blend in from a calibration T-pose over their first six
+/// frames (50 ms), which swing the limbs 15–40° per frame; the generator's and the demo's clips
+/// (30 frames/s) start in the take.
+const CMU_CALIBRATION_FRAMES: usize = 6;
+
+/// Frames to skip at the start of `motion`: the calibration lead-in of a raw capture at more than
+/// 60 frames/s, none otherwise (`CLOTH_FIRST_FRAME` overrides it).
+fn calibration_frames(motion: &Motion) -> usize {
+    if motion.frame_time < 1.0 / 60.0 {
+        CMU_CALIBRATION_FRAMES
+    } else {
+        0
+    }
+}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -96,15 +111,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         material.bend_compliance *= v;
     }
     let extra_clip = std::env::var("CLOTH_CLIP").ok();
-    let (clips, first_frame) = match &extra_clip {
-        Some(clip) => (vec![("clip", clip.as_str())], 0),
-        None => (
-            vec![
-                ("walk", "tests/data/mocap/cmu_02_01_walk.bvh"),
-                ("kick", "tests/data/mocap/cmu_10_03_kick_ball.bvh"),
-            ],
-            FIRST_FRAME,
-        ),
+    let clips = match &extra_clip {
+        Some(clip) => vec![("clip", clip.as_str())],
+        None => vec![
+            ("walk", "tests/data/mocap/cmu_02_01_walk.bvh"),
+            ("kick", "tests/data/mocap/cmu_10_03_kick_ball.bvh"),
+        ],
     };
     // Garments: the bench's T-shirt and dress, or those named in CLOTH_GARMENTS (e.g. `skirt`).
     let kinds: Vec<GarmentKind> = match std::env::var("CLOTH_GARMENTS") {
@@ -126,6 +138,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let subject =
                 Subject::find(&subject_name).ok_or(format!("no subject {subject_name}"))?;
             BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM)?
+        };
+        let first_frame = match env("CLOTH_FIRST_FRAME") {
+            Some(frame) => frame as usize,
+            None => calibration_frames(&motion),
         };
         let (frames, _) =
             rig.scale_motion(&motion)
