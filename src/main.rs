@@ -117,6 +117,10 @@ enum Command {
         /// keeps it always, as before the tenth session of 2026-12-05).
         #[arg(long)]
         keep_room_share: Option<f32>,
+        /// Without the room learned pixel by pixel (as before the second session of 2026-12-06;
+        /// for comparisons).
+        #[arg(long)]
+        no_room: bool,
         /// Also write the graph of this frame index as GCG1 (to compare solvers).
         #[arg(long, requires = "graph_out")]
         dump_graph: Option<u64>,
@@ -483,13 +487,18 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
 }
 
 /// The segmenter's options with `suitcap segment`'s overrides of the part memory (nats), the
-/// share of the person's own part colours and the edge snapping's room share for marker colours.
+/// share of the person's own part colours, the edge snapping's room share for marker colours and
+/// the room model (`no_room`: off).
 fn segmenter_options(
     part_memory: Option<f32>,
     part_colours: Option<f32>,
     keep_room_share: Option<f32>,
+    no_room: bool,
 ) -> anyhow::Result<SegmenterOptions> {
     let mut options = SegmenterOptions::default();
+    if no_room {
+        options.room = None;
+    }
     if let Some(nats) = part_memory {
         if !(nats.is_finite() && nats >= 0.0) {
             bail!("--part-memory: {nats} is not a finite number >= 0");
@@ -876,19 +885,22 @@ fn main() -> ExitCode {
             part_memory,
             part_colours,
             keep_room_share,
+            no_room,
             dump_graph,
             graph_out,
-        } => segmenter_options(*part_memory, *part_colours, *keep_room_share).and_then(|options| {
-            segment(
-                suit,
-                input,
-                out,
-                truth.as_ref(),
-                weights.as_deref(),
-                options,
-                dump_graph.zip(graph_out.as_ref()),
-            )
-        }),
+        } => segmenter_options(*part_memory, *part_colours, *keep_room_share, *no_room).and_then(
+            |options| {
+                segment(
+                    suit,
+                    input,
+                    out,
+                    truth.as_ref(),
+                    weights.as_deref(),
+                    options,
+                    dump_graph.zip(graph_out.as_ref()),
+                )
+            },
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -5,7 +5,8 @@
 //! motion and temporal lookup tables, pairwise weights from the learned neighbourhood table — with an
 //! s-t minimum cut, then keeps one person region. [`features`] quantises pixels, [`tables`] learns and
 //! stores the likelihoods, [`train`] fits them to frames with masks, [`segmenter`] runs them per frame
-//! on [`maxflow`] (a grid max-flow written for this), [`cleanup`] and [`snap`]; [`gcg`] reads and
+//! on [`maxflow`] (a grid max-flow written for this), [`cleanup`] and [`snap`], with [`room`], the
+//! room behind the person learned pixel by pixel; [`gcg`] reads and
 //! writes frame graphs in the GCG1 format of the reference solver (`../shared/peers/maxflow/`). The
 //! [`Mask`](crate::mask::Mask) it returns goes to marker detection.
 
@@ -13,6 +14,7 @@ pub mod cleanup;
 pub mod features;
 pub mod gcg;
 pub mod maxflow;
+pub mod room;
 pub mod segmenter;
 pub mod snap;
 pub mod tables;

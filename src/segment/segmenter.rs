@@ -15,7 +15,10 @@
 //!    learned online from this stream's own confident background pixels (more than
 //!    [`SegmenterOptions::adapt_margin`] pixels from the person, decaying by
 //!    [`SegmenterOptions::adapt_rate`] per frame), as bilayer segmenters do: the 20 training frames
-//!    cannot show the room the suit will be used in, the stream itself does after one frame;
+//!    cannot show the room the suit will be used in, the stream itself does after one frame; and
+//!    a pixel that shows what it showed while the person was elsewhere (the room learned pixel by
+//!    pixel from those pixels beyond the part band, [`room`](super::room),
+//!    [`SegmenterOptions::room`]) counts as likelier background;
 //! 4. keeps the connected region that carries the most suit cloth next to markers, with the pieces of
 //!    suit near it that an arm or an object in front cut off ([`SegmenterOptions::piece_reach`]), fills
 //!    small holes ([`cleanup`](super::cleanup)); removes the pieces that are not the suit's cloth
@@ -25,7 +28,7 @@
 //!    [`SegmenterOptions::off_cloth_max_markers`]), and reports what that changed; then attaches
 //!    the head, hands and shoes: pixels of a band around the suit ([`SegmenterOptions::part_reach`])
 //!    connected to it whose colour is likelier under the learned part table than under the (online)
-//!    background, in pieces shaped like a head, a hand or a shoe ([`SegmenterOptions::part_max_share`],
+//!    background and that do not show the room learned pixel by pixel, in pieces shaped like a head, a hand or a shoe ([`SegmenterOptions::part_max_share`],
 //!    [`SegmenterOptions::part_max_top_share`], [`SegmenterOptions::part_max_round_share`],
 //!    [`SegmenterOptions::part_min_depth`]; a piece beside the suit, a hand, may not hang on by a
 //!    pixel or two of contact: [`SegmenterOptions::part_max_side_depth`]); a head that the band
@@ -61,6 +64,7 @@ use super::features::{
     TEMPORAL_BINS,
 };
 use super::maxflow::{GridGraph, GridMaxFlow};
+use super::room::{RoomModel, RoomSettings};
 use super::snap::{snap_to_colour_edges, Snapping};
 use super::tables::SegmenterTables;
 use crate::mask::{bounding_box_of, grow_square_into, Mask};
@@ -186,6 +190,11 @@ pub struct SegmenterOptions {
     pub hand_colour_share: f32,
     /// Share of the online part-colour histogram that each frame's head and shoes replace.
     pub part_colour_rate: f32,
+    /// The room pixel by pixel ([`RoomModel`], learned like the room's colours, from the pixels
+    /// well away from the person, and beyond the part band): a band pixel that shows what it
+    /// showed while the person was elsewhere is not a part, and the cut counts a pixel that shows
+    /// it likelier background. `None`: off (as before the second session of 2026-12-06).
+    pub room: Option<RoomSettings>,
 }
 
 /// How far (cut pixels, chessboard) the previous frame's parts reach for
@@ -225,6 +234,7 @@ impl Default for SegmenterOptions {
             part_colour_share: 0.3,
             hand_colour_share: 0.75,
             part_colour_rate: 0.3,
+            room: Some(RoomSettings::default()),
         }
     }
 }
@@ -326,6 +336,12 @@ pub struct Segmenter {
     /// A marker's side as a share of the cut region's height (the suit's marker size on a
     /// person of [`PERSON_HEIGHT_CM`]).
     marker_side_share: f32,
+    /// The room pixel by pixel ([`SegmenterOptions::room`]) and this frame's brightness against it.
+    room: RoomModel,
+    /// Per grid pixel of this frame: does it show the room ([`RoomModel::room_pixels`])?
+    room_seen: Vec<bool>,
+    /// Scratch: the grid pixels the room is learned from.
+    far: Vec<bool>,
 }
 
 /// Pixel counts over the colour bins, from which the online background and part colours are
@@ -509,6 +525,9 @@ impl Segmenter {
             narrow_parts: (Vec::new(), Vec::new()),
             stack: Vec::new(),
             marker_side_share: suit.marker_size_cm / PERSON_HEIGHT_CM,
+            room: RoomModel::new(),
+            room_seen: Vec::new(),
+            far: Vec::new(),
         }
     }
 
@@ -524,6 +543,7 @@ impl Segmenter {
         self.previous_parts.clear();
         self.online_background = None;
         self.online_part = None;
+        self.room.clear();
         self.part_bin.clone_from(&self.tables.part);
         self.hand_bin.clone_from(&self.tables.part);
         self.background_colour.clone_from(&self.tables.colour[0]);
@@ -531,10 +551,11 @@ impl Segmenter {
     }
 
     /// Learns the background colours of this frame from pixels well away from the person and
-    /// refreshes the background colour likelihood for the next frame.
+    /// refreshes the background colour likelihood for the next frame; learns the room pixel by
+    /// pixel from those of them beyond the part band.
     fn adapt_background(&mut self, labels: &[bool]) {
         let o = self.options;
-        if o.adapt_rate <= 0.0 {
+        if o.adapt_rate <= 0.0 && o.room.is_none() {
             return;
         }
         let (w, h) = (self.features.width, self.features.height);
@@ -543,8 +564,10 @@ impl Segmenter {
         let margin = o.adapt_margin as usize;
         let near = distance_near(labels, w, h, margin + 1, &mut self.distance);
         let mut histogram = BinHistogram::new();
+        self.far.clear();
         for y in 0..h {
             for x in 0..w {
+                let i = y * w + x;
                 let far = match near {
                     Some(b) if b.contains(x, y) => {
                         self.distance[(y - b.y0) * b.width() + x - b.x0] as usize > 3 * margin
@@ -552,9 +575,20 @@ impl Segmenter {
                     _ => true,
                 };
                 if far {
-                    histogram.add(self.features.colour[y * w + x].bin);
+                    histogram.add(self.features.colour[i].bin);
                 }
+                // A head the part test missed lies within the band: learned as room, it would
+                // never be found there again.
+                self.far
+                    .push(far && !self.band.get(i).copied().unwrap_or(false));
             }
+        }
+        if let Some(settings) = &o.room {
+            let far = &self.far;
+            self.room.learn(&self.small, w, h, |i| far[i], settings);
+        }
+        if o.adapt_rate <= 0.0 {
+            return;
         }
         let Some(histogram) = histogram.normalised() else {
             return;
@@ -630,6 +664,26 @@ impl Segmenter {
         let before_previous = self.before_previous_mask.as_deref();
         let sigma_c = self.tables.weights.colour;
         let background_colour = &self.background_colour;
+        // The room: this frame's brightness against the model's, over the known pixels that were
+        // not the person in the previous frame.
+        match &self.options.room {
+            Some(settings) => {
+                let previous = self.previous_mask.as_deref();
+                let gain =
+                    self.room
+                        .gain(&self.small, |i| previous.is_none_or(|m| !m[i]), settings);
+                self.room
+                    .room_pixels(&self.small, gain, settings, &mut self.room_seen);
+            }
+            None => {
+                self.room_seen.clear();
+                self.room_seen.resize(w * h, false);
+            }
+        }
+        let (room_seen, room_bonus) = (
+            &self.room_seen,
+            self.options.room.map_or(0.0, |r| r.cut_bonus),
+        );
         let (source, sink, right, down) = self.graph.parts_mut();
         for i in 0..w * h {
             let c = f.colour[i];
@@ -658,6 +712,9 @@ impl Segmenter {
                     e[0] += u.prior[0];
                     e[1] += u.prior[1];
                 }
+            }
+            if room_seen[i] {
+                e[0] -= room_bonus;
             }
             let m = e[0].min(e[1]);
             source[i] = e[0] - m; // cost of labelling i background
@@ -836,8 +893,12 @@ impl Segmenter {
             0.0
         };
         let previous_parts = &self.previous_parts;
+        let room_seen = &self.room_seen;
         let part_like = |remember: bool| {
             move |i: usize| {
+                if room_seen[i] {
+                    return false;
+                }
                 let bin = colours[i].bin as usize;
                 let remembered = if remember && previous_parts[i] {
                     memory
