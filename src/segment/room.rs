@@ -77,30 +77,38 @@ impl RoomModel {
         self.height = 0;
     }
 
-    /// Learns the pixels of `rgb` (`width` × `height`, row-major) for which `far` holds; a grid
-    /// of another size starts the model afresh.
+    /// Learns the pixels of `rgb` (`width` × `height`, row-major) that `far` marks; a grid of
+    /// another size starts the model afresh.
     pub fn learn(
         &mut self,
         rgb: &[[u8; 3]],
         width: usize,
         height: usize,
-        far: impl Fn(usize) -> bool,
+        far: &[bool],
         settings: &RoomSettings,
     ) {
-        if width != self.width || height != self.height || self.mean.len() != width * height {
+        let n = width * height;
+        if width != self.width || height != self.height || self.mean.len() != n {
             self.width = width;
             self.height = height;
-            self.mean = vec![[0.0; 3]; width * height];
-            self.frames = vec![0; width * height];
+            self.mean = vec![[0.0; 3]; n];
+            self.frames = vec![0; n];
         }
-        for (i, &p) in rgb.iter().enumerate().take(width * height) {
-            if !far(i) {
-                continue;
-            }
-            let n = self.frames[i].saturating_add(1);
-            self.frames[i] = n;
-            let weight = (1.0 / n as f32).max(settings.rate);
-            for (m, &c) in self.mean[i].iter_mut().zip(&p) {
+        // The weight of the n-th frame, max(1/n, rate), looked up rather than divided for.
+        let settled = (1.0 / settings.rate.max(1e-3)).ceil() as usize;
+        let weights: Vec<f32> = (0..=settled)
+            .map(|k| (1.0 / k.max(1) as f32).max(settings.rate))
+            .collect();
+        for (((p, m), count), _) in rgb
+            .iter()
+            .zip(&mut self.mean)
+            .zip(&mut self.frames)
+            .zip(far)
+            .filter(|(_, &far)| far)
+        {
+            *count = count.saturating_add(1);
+            let weight = weights[(*count as usize).min(settled)];
+            for (m, &c) in m.iter_mut().zip(p) {
                 *m += weight * (c as f32 - *m);
             }
         }
@@ -199,9 +207,9 @@ mod tests {
     fn a_pixel_is_known_after_min_frames_and_its_mean_is_the_average_until_then() {
         let mut room = RoomModel::new();
         // A 2 × 1 grid; only pixel 0 is ever far from the person.
-        room.learn(&[[100, 0, 0], [7, 7, 7]], 2, 1, |i| i == 0, &SETTINGS);
+        room.learn(&[[100, 0, 0], [7, 7, 7]], 2, 1, &[true, false], &SETTINGS);
         assert!(!room.knows(0, &SETTINGS));
-        room.learn(&[[120, 0, 0], [7, 7, 7]], 2, 1, |i| i == 0, &SETTINGS);
+        room.learn(&[[120, 0, 0], [7, 7, 7]], 2, 1, &[true, false], &SETTINGS);
         assert!(room.knows(0, &SETTINGS));
         assert!(!room.knows(1, &SETTINGS));
         // Two frames weigh ½ each: mean 110.
@@ -222,10 +230,10 @@ mod tests {
     fn after_enough_frames_a_new_frame_weighs_the_rate() {
         let mut room = RoomModel::new();
         for _ in 0..8 {
-            room.learn(&[[100, 100, 100]], 1, 1, |_| true, &SETTINGS);
+            room.learn(&[[100, 100, 100]], 1, 1, &[true], &SETTINGS);
         }
         // 100 + 0.25 · (200 − 100) = 125.
-        room.learn(&[[200, 200, 200]], 1, 1, |_| true, &SETTINGS);
+        room.learn(&[[200, 200, 200]], 1, 1, &[true], &SETTINGS);
         assert!(room.shows_room(0, [125, 125, 125], 1.0, &SETTINGS));
         assert!(!room.shows_room(0, [136, 125, 125], 1.0, &SETTINGS));
     }
@@ -235,7 +243,7 @@ mod tests {
         let mut room = RoomModel::new();
         let before = [[100, 50, 20], [40, 40, 40], [200, 100, 0]];
         for _ in 0..2 {
-            room.learn(&before, 3, 1, |_| true, &SETTINGS);
+            room.learn(&before, 3, 1, &[true; 3], &SETTINGS);
         }
         let brighter: Vec<[u8; 3]> = before
             .iter()
@@ -253,10 +261,10 @@ mod tests {
     fn another_grid_size_starts_afresh_and_clear_forgets() {
         let mut room = RoomModel::new();
         for _ in 0..2 {
-            room.learn(&[[9, 9, 9]], 1, 1, |_| true, &SETTINGS);
+            room.learn(&[[9, 9, 9]], 1, 1, &[true], &SETTINGS);
         }
         assert!(room.knows(0, &SETTINGS));
-        room.learn(&[[9, 9, 9], [9, 9, 9]], 2, 1, |_| true, &SETTINGS);
+        room.learn(&[[9, 9, 9], [9, 9, 9]], 2, 1, &[true; 2], &SETTINGS);
         assert!(!room.knows(0, &SETTINGS));
         assert_eq!(room.gain(&[[9, 9, 9]], |_| true, &SETTINGS), 1.0);
         room.clear();

@@ -584,8 +584,7 @@ impl Segmenter {
             }
         }
         if let Some(settings) = &o.room {
-            let far = &self.far;
-            self.room.learn(&self.small, w, h, |i| far[i], settings);
+            self.room.learn(&self.small, w, h, &self.far, settings);
         }
         if o.adapt_rate <= 0.0 {
             return;
