@@ -18,6 +18,10 @@
 //!
 //! Gives the segmenter two things: a band pixel that shows the room is not a part, and the cut
 //! counts a pixel that shows the room [`RoomSettings::cut_bonus`] nats likelier background.
+//!
+//! Written here rather than taken from a crate: it is a running mean and a comparison over the
+//! cut's grid, and the background subtractors that do more (OpenCV's mixtures of Gaussians) would
+//! bring a C++ library into the build.
 
 /// Per grid pixel: the running mean colour over the frames it was learned in, and in how many.
 #[derive(Clone, Debug, Default)]
@@ -34,7 +38,8 @@ pub struct RoomSettings {
     /// The running mean's weight of a new frame once a pixel has been learned `1/rate` times
     /// (before, every frame counts alike).
     pub rate: f32,
-    /// Frames a pixel must have been learned in before it is compared.
+    /// Frames a pixel must have been learned in before it is compared (a stream's first frame,
+    /// which the segmenter segments twice, is learned twice).
     pub min_frames: u16,
     /// Largest difference in any channel (0–255, after the gain) of a pixel that shows the room.
     pub tolerance: f32,

@@ -28,7 +28,8 @@
 //!    [`SegmenterOptions::off_cloth_max_markers`]), and reports what that changed; then attaches
 //!    the head, hands and shoes: pixels of a band around the suit ([`SegmenterOptions::part_reach`])
 //!    connected to it whose colour is likelier under the learned part table than under the (online)
-//!    background and that do not show the room learned pixel by pixel, in pieces shaped like a head, a hand or a shoe ([`SegmenterOptions::part_max_share`],
+//!    background and that do not show the room learned pixel by pixel, in pieces shaped like a
+//!    head, a hand or a shoe ([`SegmenterOptions::part_max_share`],
 //!    [`SegmenterOptions::part_max_top_share`], [`SegmenterOptions::part_max_round_share`],
 //!    [`SegmenterOptions::part_min_depth`]; a piece beside the suit, a hand, may not hang on by a
 //!    pixel or two of contact: [`SegmenterOptions::part_max_side_depth`]); a head that the band
@@ -336,7 +337,7 @@ pub struct Segmenter {
     /// A marker's side as a share of the cut region's height (the suit's marker size on a
     /// person of [`PERSON_HEIGHT_CM`]).
     marker_side_share: f32,
-    /// The room pixel by pixel ([`SegmenterOptions::room`]) and this frame's brightness against it.
+    /// The room pixel by pixel ([`SegmenterOptions::room`]).
     room: RoomModel,
     /// Per grid pixel of this frame: does it show the room ([`RoomModel::room_pixels`])?
     room_seen: Vec<bool>,
