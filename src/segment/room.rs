@@ -173,15 +173,12 @@ impl RoomModel {
             out.resize(rgb.len(), false);
             return;
         }
-        let (min_frames, tolerance) = (settings.min_frames.max(1), settings.tolerance);
+        let min_frames = settings.min_frames.max(1);
         out.extend(
             rgb.iter()
                 .zip(&self.mean)
                 .zip(&self.frames)
-                .map(|((p, m), &n)| {
-                    n >= min_frames
-                        && (0..3).all(|c| (p[c] as f32 - gain * m[c]).abs() <= tolerance)
-                }),
+                .map(|((&p, m), &n)| n >= min_frames && within(p, m, gain, settings.tolerance)),
         );
     }
 
@@ -189,12 +186,16 @@ impl RoomModel {
     /// tolerance of its mean times `gain` in every channel.
     #[inline]
     pub fn shows_room(&self, i: usize, p: [u8; 3], gain: f32, settings: &RoomSettings) -> bool {
-        self.knows(i, settings)
-            && self.mean[i]
-                .iter()
-                .zip(&p)
-                .all(|(&m, &c)| (c as f32 - gain * m).abs() <= settings.tolerance)
+        self.knows(i, settings) && within(p, &self.mean[i], gain, settings.tolerance)
     }
+}
+
+/// Whether colour `p` lies within `tolerance` of `mean` × `gain` in every channel.
+#[inline]
+fn within(p: [u8; 3], mean: &[f32; 3], gain: f32, tolerance: f32) -> bool {
+    p.iter()
+        .zip(mean)
+        .all(|(&c, &m)| (c as f32 - gain * m).abs() <= tolerance)
 }
 
 #[cfg(test)]
