@@ -17,14 +17,11 @@ use std::path::Path;
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 
 use suitcap::body::Subject;
-use suitcap::bvh::Motion;
+use suitcap::bvh::{Motion, CMU_CALIBRATION_FRAMES};
 use suitcap::cloth::garment::{GarmentKind, GarmentMesh, GarmentParams};
 use suitcap::cloth::material::Material;
 use suitcap::cloth::proxies::{BodyRig, DEFAULT_MARGIN_CM};
 use suitcap::cloth::solver::{run_motion, Cloth, SolverSettings};
-
-/// The shipped CMU clips blend in from a calibration T-pose over their first six frames (50 ms).
-const FIRST_FRAME: usize = 6;
 
 fn bench(c: &mut Criterion) {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -45,7 +42,7 @@ fn bench(c: &mut Criterion) {
         let rig = BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig");
         let (frames, _) = rig
             .scale_motion(&motion)
-            .resample(FIRST_FRAME, None, settings.fps as f64)
+            .resample(CMU_CALIBRATION_FRAMES, None, settings.fps as f64)
             .expect("resample");
         // Quality figures: the dressed garment run over the clip, its summary printed
         // (CLOTH_BENCH_SPEED_ONLY=1 leaves them out, for timing runs).

@@ -31,7 +31,7 @@ use glam::Vec3A;
 use suitcap::body::Body;
 use suitcap::body::Subject;
 use suitcap::body_size::BodySize;
-use suitcap::bvh::Motion;
+use suitcap::bvh::{Motion, CMU_CALIBRATION_FRAMES};
 use suitcap::cloth::capsule::Capsule;
 use suitcap::cloth::garment::{GarmentKind, GarmentMesh, GarmentParams};
 use suitcap::cloth::material::Material;
@@ -39,13 +39,9 @@ use suitcap::cloth::proxies::{BodyRig, DEFAULT_MARGIN_CM};
 use suitcap::cloth::solver::{run_motion, Cloth, SolverSettings};
 use suitcap::cloth::topology::unique_edges;
 
-/// The raw CMU clips (120 frames/s) blend in from a calibration T-pose over their first six
-/// frames (50 ms), which swing the limbs 15–40° per frame; the generator's and the demo's clips
-/// (30 frames/s) start in the take.
-const CMU_CALIBRATION_FRAMES: usize = 6;
-
 /// Frames to skip at the start of `motion`: the calibration lead-in of a raw capture at more than
-/// 60 frames/s, none otherwise (`CLOTH_FIRST_FRAME` overrides it).
+/// 60 frames/s ([`CMU_CALIBRATION_FRAMES`]), none otherwise (the generator's and the demo's clips,
+/// at 30 frames/s, start in the take; `CLOTH_FIRST_FRAME` overrides it).
 fn calibration_frames(motion: &Motion) -> usize {
     if motion.frame_time < 1.0 / 60.0 {
         CMU_CALIBRATION_FRAMES

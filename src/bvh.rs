@@ -19,6 +19,11 @@ use glam::Vec3;
 
 use crate::skeleton::{Channel, Joint, Skeleton, SkeletonError};
 
+/// Frames at the start of a raw CMU capture (120 frames/s) that blend in from the calibration
+/// T-pose (50 ms, the limbs swinging 15–40° a frame back into the take): the cloth bench and its
+/// quality example start after them.
+pub const CMU_CALIBRATION_FRAMES: usize = 6;
+
 /// A skeleton with frames of channel values.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Motion {

@@ -2205,10 +2205,9 @@ mod tests {
             &Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh"),
         )
         .expect("clip");
-        // The clip's first six frames blend in from the calibration T-pose.
         let (frames, _) = rig
             .scale_motion(&clip)
-            .resample(6, Some(12), 30.0)
+            .resample(crate::bvh::CMU_CALIBRATION_FRAMES, Some(12), 30.0)
             .expect("resample");
         (rig, frames)
     }
