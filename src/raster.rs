@@ -375,15 +375,15 @@ pub fn draw_triangle(
     near: f32,
     shade: impl FnMut(Fragment),
 ) {
-    let Some(Oriented {
+    let Some(oriented) = orient(vertices, cull, near) else {
+        return;
+    };
+    let Oriented {
         v,
         area,
         front_facing,
         ..
-    }) = orient(vertices, cull, near)
-    else {
-        return;
-    };
+    } = oriented;
     let [a, b, c] = vertices;
     // The caller's signed area is positive where its winding faces away from the camera.
     let area_positive = !front_facing;
@@ -433,7 +433,7 @@ pub fn draw_triangle(
     } else {
         // Extreme input (huge coordinates, absurd depths): every pixel of the bounding box tested
         // on its own.
-        reference::draw_triangle(buffer, vertices, cull, near, shade);
+        reference::draw_oriented(buffer, oriented, shade);
     }
 }
 
@@ -573,17 +573,25 @@ pub mod reference {
         vertices: [ScreenVertex; 3],
         cull: Cull,
         near: f32,
+        shade: impl FnMut(Fragment),
+    ) {
+        if let Some(oriented) = orient(vertices, cull, near) {
+            draw_oriented(buffer, oriented, shade);
+        }
+    }
+
+    /// The pixel loop of [`draw_triangle`], for a triangle [`orient`] accepted.
+    pub(super) fn draw_oriented(
+        buffer: &mut DepthBuffer,
+        oriented: Oriented,
         mut shade: impl FnMut(Fragment),
     ) {
-        let Some(Oriented {
+        let Oriented {
             v,
             order,
             area,
             front_facing,
-        }) = orient(vertices, cull, near)
-        else {
-            return;
-        };
+        } = oriented;
         // The pixel rows or columns `[floor(min), ceil(max))` the three coordinates span,
         // clipped to `[0, limit]`.
         let span = |c: [f32; 3], limit: f32| {
