@@ -556,9 +556,9 @@ pub fn triangle_facing(
 /// `colour · intensity`, rounded and clamped to 0..=255.
 #[inline]
 pub fn shade(colour: [f32; 3], intensity: f32) -> [u8; 3] {
-    // Written out per channel: `colour.map(..)` was compiled as an out-of-line call per pixel,
-    // a fifth of the renderer's time.
-    // `as u8` saturates (below 0 and NaN give 0, above 255 gives 255): the clamp.
+    // Written out per channel (`colour.map(..)` was compiled as an out-of-line call per pixel, a
+    // fifth of the render + composite benchmark's time); `as u8` saturates (below 0 and NaN give
+    // 0, above 255 gives 255), which is the clamp.
     let channel = |c: f32| (c * intensity + 0.5) as u8;
     [channel(colour[0]), channel(colour[1]), channel(colour[2])]
 }
