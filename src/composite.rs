@@ -360,7 +360,7 @@ impl<'a> Canvas<'a> {
     }
 
     /// Text lines with their top-left corner (of the backdrop) at pixel (x, y). Characters outside
-    /// printable ASCII draw as '?'.
+    /// printable ASCII but '°' draw as '?'.
     pub fn text<S: AsRef<str>>(&mut self, x: f32, y: f32, lines: &[S], style: &TextStyle) {
         let s = style.scale.max(1) as f32;
         let pad = 2.0 * s;
@@ -442,8 +442,14 @@ pub mod font {
     pub const PITCH_X: u32 = 6;
     pub const PITCH_Y: u32 = 8;
 
+    /// The degree sign, the one character beyond printable ASCII (angle errors are in degrees).
+    const DEGREE: [u8; 7] = [0x0C, 0x12, 0x12, 0x0C, 0x00, 0x00, 0x00];
+
     /// Rows top to bottom; bit 4 is the leftmost column.
     pub fn glyph(c: char) -> [u8; 7] {
+        if c == '°' {
+            return DEGREE;
+        }
         let code = c as u32;
         let index = if (32..=126).contains(&code) {
             code - 32
@@ -689,8 +695,9 @@ mod tests {
         // 'R' top-left cell at (1 + 4, 1 + 4), 2×2 pixels.
         assert_eq!(out.get_pixel(5, 5).0, [255, 0, 0]);
         assert_eq!(out.get_pixel(6, 6).0, [255, 0, 0]);
-        // Unknown characters draw as '?'.
+        // Unknown characters draw as '?'; the degree sign is a small ring at the top.
         assert_eq!(font::glyph('é'), font::glyph('?'));
+        assert_eq!(font::glyph('°'), [0x0C, 0x12, 0x12, 0x0C, 0, 0, 0]);
     }
 
     #[test]

@@ -92,6 +92,53 @@ fn run_writes_one_bvh_frame_per_input_frame() {
 }
 
 #[test]
+fn eval_writes_the_per_joint_table_and_its_bar_chart() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let data = generated_clip(&tmp.path().join("clip"));
+    let train = Path::new(env!("CARGO_BIN_EXE_suitcap")).with_file_name("suitcap-train");
+    let (csv, chart) = (tmp.path().join("joints.csv"), tmp.path().join("joints.png"));
+    let table = succeeded(
+        Command::new(&train)
+            .args([
+                "eval",
+                "--suit",
+                repo("suits/default").to_str().expect("utf-8 path"),
+                "--data",
+            ])
+            .arg(&data)
+            .arg("--csv")
+            .arg(&csv)
+            .arg("--chart")
+            .arg(&chart)
+            .output()
+            .expect("runs (the test command builds the workspace first)"),
+    );
+    assert!(table.contains("(12 frames, masks: segmenter)"), "{table}");
+    // A header, a row per joint of the printed table, and the mean.
+    let rows = std::fs::read_to_string(&csv).expect("the CSV");
+    let lines: Vec<&str> = rows.lines().collect();
+    assert_eq!(lines[0], "joint,euler_deg,geodesic_deg");
+    assert!(
+        lines.last().is_some_and(|l| l.starts_with("mean,")),
+        "{rows}"
+    );
+    let printed: Vec<&str> = table
+        .lines()
+        .skip_while(|l| !l.starts_with("joint "))
+        .skip(1)
+        .collect();
+    assert_eq!(lines.len() - 1, printed.len(), "{table}");
+    for (row, line) in lines[1..].iter().zip(&printed) {
+        let name = row.split(',').next().unwrap_or_default();
+        assert!(line.starts_with(&format!("{name} ")), "{row} / {line}");
+    }
+    let image = image::open(&chart).expect("a PNG").to_rgb8();
+    assert!(image.width() > 600 && image.height() > 400);
+    // The Euler series' blue is drawn somewhere.
+    assert!(image.pixels().any(|p| p.0 == [0x1f, 0x77, 0xb4]));
+}
+
+#[test]
 fn a_truncated_model_file_is_a_clear_error() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let suit = tmp.path().join("suit");

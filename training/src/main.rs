@@ -15,6 +15,7 @@ use clap::{Parser, Subcommand};
 
 use suitcap::dataset::Dataset;
 use suitcap::mask::Mask;
+use suitcap::pose::chart::{BarChart, Series};
 use suitcap::pose::{PoseLayout, RotationEncoding};
 use suitcap::segment::{
     train_segmenter, SearchStep, TrainingFrame, WeightSearch, MAX_VALIDATION_FRAMES,
@@ -93,7 +94,8 @@ enum Command {
     /// The source paper's experiments on one trained suit's segmenter and codebooks: regressors for
     /// the FC, HOG, FC+HOG(+box) and silhouette descriptors with S candidate basis functions each,
     /// trained on --train (on the suit's segmenter masks unless `--masks truth`) and measured on
-    /// --data (segmenter masks). Writes OUT/experiments.csv and a bar chart OUT/experiments.svg.
+    /// --data (segmenter masks). Writes OUT/experiments.csv and a bar chart, OUT/experiments.svg
+    /// and OUT/experiments.png.
     Experiments {
         #[arg(long)]
         suit: PathBuf,
@@ -179,6 +181,10 @@ enum Command {
         /// that nobody was found.
         #[arg(long)]
         frames_csv: Option<PathBuf>,
+        /// Also draw the per-joint errors (Euler and geodesic, and their means) as a bar chart
+        /// PNG, like the source paper's Fig. 4/5.
+        #[arg(long)]
+        chart: Option<PathBuf>,
     },
 }
 
@@ -1394,6 +1400,7 @@ fn eval(
     csv: Option<&PathBuf>,
     json: Option<&PathBuf>,
     frames: Option<&PathBuf>,
+    chart: Option<&PathBuf>,
 ) -> anyhow::Result<()> {
     let (all, per_dataset, per_frame) = evaluate(suit_dir, data, truth_masks, true)?;
     if let Some(path) = frames {
@@ -1420,6 +1427,38 @@ fn eval(
     );
     if let Some(path) = csv {
         suitcap::io::write_atomic(path, all.to_csv().as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let Some(path) = chart {
+        let joints = 0..names.len();
+        let chart = BarChart {
+            title: format!(
+                "Joint angle error (°) over {} frames, masks: {}",
+                all.frames,
+                if truth_masks {
+                    "ground truth"
+                } else {
+                    "segmenter"
+                }
+            ),
+            joints: names.clone(),
+            series: vec![
+                Series {
+                    name: "Euler".into(),
+                    values: joints.clone().map(|j| all.euler(j)).collect(),
+                    mean: all.mean_euler(),
+                },
+                Series {
+                    name: "geodesic".into(),
+                    values: joints.map(|j| all.geodesic(j)).collect(),
+                    mean: all.mean_geodesic(),
+                },
+            ],
+        };
+        let png = chart
+            .png()
+            .with_context(|| format!("cannot encode {}", path.display()))?;
+        suitcap::io::write_atomic(path, &png)
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     if let Some(path) = json {
@@ -1559,21 +1598,29 @@ fn experiments(
         .map(|j| j.name.clone())
         .collect();
     let largest = bases.iter().copied().max().unwrap_or(0);
-    let chart = suitcap::pose::chart::bar_chart_svg(
-        &format!("Mean joint angle error (°, Euler) with S = {largest}"),
-        &names,
-        &results
+    let chart = BarChart {
+        title: format!("Mean joint angle error (°, Euler) with S = {largest}"),
+        joints: names,
+        series: results
             .iter()
             .filter(|r| r.1 == largest)
-            .map(|r| (r.0.name().to_string(), r.2.clone(), r.3))
-            .collect::<Vec<_>>(),
-    );
-    suitcap::io::write_atomic(&out.join("experiments.svg"), chart.as_bytes())
+            .map(|r| Series {
+                name: r.0.name().to_string(),
+                values: r.2.clone(),
+                mean: r.3,
+            })
+            .collect(),
+    };
+    suitcap::io::write_atomic(&out.join("experiments.svg"), chart.svg().as_bytes())
         .context("cannot write experiments.svg")?;
+    let png = chart.png().context("cannot encode experiments.png")?;
+    suitcap::io::write_atomic(&out.join("experiments.png"), &png)
+        .context("cannot write experiments.png")?;
     println!(
-        "written {} and {}",
+        "written {}, {} and {}",
         out.join("experiments.csv").display(),
-        out.join("experiments.svg").display()
+        out.join("experiments.svg").display(),
+        out.join("experiments.png").display()
     );
     Ok(())
 }
@@ -1640,6 +1687,7 @@ fn main() -> ExitCode {
             csv,
             json,
             frames_csv,
+            chart,
         } => eval(
             suit,
             data,
@@ -1647,6 +1695,7 @@ fn main() -> ExitCode {
             csv.as_ref(),
             json.as_ref(),
             frames_csv.as_ref(),
+            chart.as_ref(),
         ),
     };
     match result {
