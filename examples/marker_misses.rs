@@ -3,10 +3,10 @@
 //!
 //! `cargo run --release --example marker_misses -- MASKS_DIR_NAME DATASET [DATASET ...]`
 //! (MASKS_DIR_NAME: `masks` for ground truth, `segmasks` for the segmenter's). Prints per dataset
-//! the recall and precision (as `suitcap describe --truth-markers` scores them), why each missed
-//! marker was missed (its detection taken by another truth marker of its colour, on the same body
-//! part or another, or else the verdict of the nearest same-colour component), and a few traits of
-//! the false detections.
+//! the recall (the count) and precision, as `suitcap describe --truth-markers` scores
+//! them, why each missed marker was missed (its detection taken by another truth marker of its
+//! colour, on the same body part or another, or else the verdict of the nearest same-colour
+//! component), and a few traits of the false detections.
 //! `VERBOSE=1` lists every miss (with its marker id and the id of the truth marker that took its
 //! detection, if one did) and every false detection; `DUMP=FILE` appends one CSV row per detection
 //! (dataset, masks, frame, colour, area, border inside / cloth / outside, peak saturation, border
@@ -18,7 +18,7 @@ use std::path::Path;
 
 use suitcap::descriptor::markers::{
     match_tolerance, matched_detections, pair_markers, Component, DetectedMarker, MarkerDetector,
-    TruthMarker, Verdict, COUNTED_VISIBLE_FRACTION, COUNTED_VISIBLE_PX,
+    TruthMarker, Verdict, COUNTED_VISIBLE_FRACTION,
 };
 use suitcap::mask::Mask;
 use suitcap::suit::SuitDefinition;
@@ -54,7 +54,7 @@ fn main() -> anyhow::Result<()> {
             let detected: Vec<DetectedMarker> = dets.iter().map(|c| c.marker).collect();
             let paired = pair_markers(&detected, &expected, tol);
             let dm = matched_detections(&paired, detected.len());
-            let counts = |m: &TruthMarker| m.counts(COUNTED_VISIBLE_FRACTION, COUNTED_VISIBLE_PX);
+            let counts = |m: &TruthMarker| m.counts(COUNTED_VISIBLE_FRACTION, 0);
             detections += dets.len();
             correct += dm.iter().filter(|&&m| m).count();
             for (t, e) in expected.iter().enumerate() {

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Reproduces the README's marker figures: five synthetic 640x480 sequences of motions the default
 # suit was not trained on, then recall and precision of `suitcap describe` against the generator's
-# visible markers (>= 60 % and >= 6 px visible), inside the ground-truth masks and inside the
-# shipped segmenter's masks, with the descriptor's median time per frame.
+# visible markers (>= 60 % of the square visible, as the issue counts; then of those also >= 6 px
+# visible), inside the ground-truth masks and inside the shipped segmenter's masks, with the
+# descriptor's median time per frame.
 #   scripts/eval_markers.sh [WORK_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -699,8 +699,9 @@ fn describe(
     rows.push('\n');
     let mut marker_rows = String::from("frame,colour,x,y,area\n");
     let mut skipped = Vec::new();
-    let (mut frames, mut times, mut score, mut counts) =
-        (0usize, Vec::new(), MarkerScore::default(), Vec::new());
+    let (mut frames, mut times, mut counts) = (0usize, Vec::new(), Vec::new());
+    // The count (every marker with 60 % of its square visible) and a stricter one.
+    let (mut score, mut score_px) = (MarkerScore::default(), MarkerScore::default());
     while let Some(frame) = next_good_frame(source.as_mut(), &mut skipped, frames) {
         let name = names
             .as_ref()
@@ -740,12 +741,20 @@ fn describe(
         }
         if let Some(truth) = &truth {
             let expected = TruthMarker::of_frame(truth, frame.index as usize, &suit);
+            let tolerance = match_tolerance(&expected);
             score.add(score_markers(
                 &markers,
                 &expected,
                 COUNTED_VISIBLE_FRACTION,
+                0,
+                tolerance,
+            ));
+            score_px.add(score_markers(
+                &markers,
+                &expected,
+                COUNTED_VISIBLE_FRACTION,
                 COUNTED_VISIBLE_PX,
-                match_tolerance(&expected),
+                tolerance,
             ));
         }
         frames += 1;
@@ -761,8 +770,9 @@ fn describe(
     println!("{frames} {} descriptors ({} values) written to {}; median {median:.2} ms per frame, {mean_markers:.0} markers per frame; {} corrupt frames skipped", kind.name(), kind.len(), out.display(), skipped.len());
     if truth.is_some() {
         println!(
-            "markers vs truth (≥ 60 % and ≥ 6 px visible): recall {:.4} ({} of {}), precision {:.4} ({} of {} detections)",
-            score.recall(), score.found, score.truth, score.precision(), score.correct, score.detections
+            "markers vs truth (those with ≥ 60 % of their square visible): recall {:.4} ({} of {}), precision {:.4} ({} of {} detections); of those with ≥ {COUNTED_VISIBLE_PX} px visible too: recall {:.4} ({} of {})",
+            score.recall(), score.found, score.truth, score.precision(), score.correct, score.detections,
+            score_px.recall(), score_px.found, score_px.truth
         );
     }
     Ok(())

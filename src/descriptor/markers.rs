@@ -705,7 +705,9 @@ pub struct Component {
 /// with its earlier ratio, which counted markers wrapped round a limb's outline as wholly visible
 /// (`docs/measurements.md` has both).
 pub const COUNTED_VISIBLE_FRACTION: f32 = 0.6;
-/// The visible pixels a truth marker needs to count for recall: fewer make no centroid to find.
+/// The visible pixels a truth marker needs to count for the stricter recall that `suitcap
+/// describe` reports beside the issue's: fewer make hardly a centroid to find (a square seen edge
+/// on, a sliver at a limb's outline). Until the third session of 2026-12-06 the only count.
 pub const COUNTED_VISIBLE_PX: u32 = 6;
 
 /// A marker the generator says is visible, for scoring detections.
