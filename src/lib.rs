@@ -14,7 +14,8 @@
 //! [`pipeline`] joins those per stream. [`body_size`], [`cloth`], [`render`] and [`composite`] put a
 //! garment on the estimated body and into the frame; [`tryon`] runs every stage on threads joined by
 //! [`queue`]s. Around them: [`suit`], [`skeleton`] and [`bvh`], [`camera`], [`body`], [`raster`],
-//! [`colour`], [`dataset`], [`model`], [`pattern`], [`preview`], [`stats`] and [`io`].
+//! [`colour`], [`dataset`], [`model`] and the suit's [`manifest`], [`pattern`], [`preview`],
+//! [`stats`] and [`io`].
 
 pub mod body;
 pub mod body_size;
@@ -26,6 +27,7 @@ pub mod composite;
 pub mod dataset;
 pub mod descriptor;
 pub mod io;
+pub mod manifest;
 pub mod mask;
 pub mod model;
 pub mod pattern;

@@ -390,6 +390,17 @@ fn check_trained_models(suit: &Path, definition: &SuitDefinition) -> anyhow::Res
     if !loaded.is_empty() {
         println!("trained models load: {}", loaded.join(", "));
     }
+    match suitcap::manifest::verify(suit)? {
+        Some(files) => println!(
+            "the model files are those {} records ({files} checksums match)",
+            suit.join(suitcap::manifest::MANIFEST_FILE).display()
+        ),
+        None if !loaded.is_empty() => println!(
+            "no checksums to compare the model files with ({} absent or from before them)",
+            suit.join(suitcap::manifest::MANIFEST_FILE).display()
+        ),
+        None => {}
+    }
     if !missing.is_empty() {
         println!(
             "not trained yet: {} (`suitcap-train suit --suit {} --data DATASET …` trains the models, `suitcap-train limits` the joint limits)",

@@ -29,6 +29,8 @@ pub enum PipelineError {
     Model(#[from] ModelError),
     #[error(transparent)]
     Regressor(#[from] RegressorError),
+    #[error(transparent)]
+    Manifest(#[from] crate::manifest::ManifestError),
 }
 
 /// Milliseconds per stage.
@@ -117,7 +119,8 @@ impl PosePipeline {
         ))
     }
 
-    /// Loads every model of a suit directory.
+    /// Loads every model of a suit directory, and checks that they are the ones its manifest
+    /// records ([`crate::manifest::verify`]).
     pub fn load(suit_dir: &Path) -> Result<PosePipeline, PipelineError> {
         let suit = SuitDefinition::load_dir(suit_dir)?;
         let segmenter = Segmenter::new(
@@ -127,6 +130,8 @@ impl PosePipeline {
         );
         let codebooks = Codebooks::load(suit_dir)?;
         let regressor = Regressor::load(suit_dir, &suit)?;
+        // Every file whole, but were they trained together?
+        crate::manifest::verify(suit_dir)?;
         let describer = Describer::new(&suit);
         let pose = vec![0.0; regressor.layout.len()];
         let correction_parts =

@@ -14,6 +14,7 @@ use anyhow::{bail, Context};
 use clap::{Parser, Subcommand};
 
 use suitcap::dataset::Dataset;
+use suitcap::manifest::{DatasetRecord, Manifest, MANIFEST_FILE, MANIFEST_FORMAT};
 use suitcap::mask::Mask;
 use suitcap::pose::chart::{BarChart, Series};
 use suitcap::pose::{PoseLayout, RotationEncoding};
@@ -1015,34 +1016,41 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         skeleton: template,
         layout,
     };
-    // Write into a scratch directory first, then move each file into place, the manifest last.
+    // Write into a scratch directory first, then move each file into place, and last the
+    // manifest with every model file's checksum (see `suitcap::manifest`): a run stopped before
+    // it leaves files the old manifest does not match, which loading then names.
     let scratch = suit_dir.join(format!(".training-{}", std::process::id()));
     std::fs::create_dir_all(&scratch)
         .with_context(|| format!("cannot create {}", scratch.display()))?;
     regressor.save(&scratch)?;
-    let manifest = format!(
-        "# suitcap suit model, written by suitcap-train {}\nformat = 1\ndescriptor = \"{}\"\nrotations = \"{}\"\nbasis_candidates = {}\nrelevance_vectors = {}\nkernel_width = {}\nnoise = {}\ntraining_frames = {}\ndatasets = [{}]\n",
-        env!("CARGO_PKG_VERSION"),
-        kind.name(),
-        rotations.name(),
-        report.candidates,
-        report.relevance_vectors,
-        width,
-        report.noise,
-        total,
-        data.iter().map(|d| format!("\"{}\"", d.display())).collect::<Vec<_>>().join(", ")
-    );
-    std::fs::write(scratch.join("model.toml"), manifest)
-        .with_context(|| format!("cannot write {}", scratch.display()))?;
     for name in [
         suitcap::pose::regressor::REGRESSOR_FILE,
         suitcap::pose::regressor::SKELETON_FILE,
-        "model.toml",
     ] {
         std::fs::rename(scratch.join(name), suit_dir.join(name))
             .with_context(|| format!("cannot move {name} into {}", suit_dir.display()))?;
     }
     let _ = std::fs::remove_dir(&scratch);
+    let manifest = Manifest {
+        format: MANIFEST_FORMAT,
+        tool: format!("suitcap-train {}", env!("CARGO_PKG_VERSION")),
+        descriptor: kind.name().to_string(),
+        rotations: rotations.name().to_string(),
+        basis_candidates: report.candidates,
+        relevance_vectors: report.relevance_vectors,
+        kernel_width: width,
+        noise: report.noise,
+        training_frames: total,
+        dataset_paths: Vec::new(),
+        datasets: data
+            .iter()
+            .map(|dir| dataset_record(dir))
+            .collect::<anyhow::Result<_>>()?,
+        files: suitcap::manifest::record_files(suit_dir)?,
+    };
+    let path = suit_dir.join(MANIFEST_FILE);
+    suitcap::io::write_atomic(&path, manifest.to_toml()?.as_bytes())
+        .with_context(|| format!("cannot write {}", path.display()))?;
     println!(
         "suit trained in {:.1} s: {} frames, {} candidates, {} relevance vectors, kernel width {width:.4}, noise σ² {:.5}, RVM {:.1} s ({} iterations); written to {}",
         started.elapsed().as_secs_f64(),
@@ -1155,6 +1163,28 @@ struct FrameError {
     root_cm: Option<f64>,
     root_px: Option<f64>,
     root_px_regressed: Option<f64>,
+}
+
+/// What the suit's manifest records of a training dataset: its directory's name, its frames, and
+/// what its own manifest says it shows (the clip, the generated subject or the recorded performer,
+/// the generator's seed).
+fn dataset_record(dir: &Path) -> anyhow::Result<DatasetRecord> {
+    let dataset = Dataset::open(dir)?;
+    let m = &dataset.manifest;
+    Ok(DatasetRecord {
+        name: dir.file_name().map_or_else(
+            || dir.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        ),
+        frames: m.frames,
+        clip: Some(m.clip.name.clone()),
+        subject: m
+            .subject
+            .as_ref()
+            .map(|s| s.name.clone())
+            .or_else(|| m.recording.as_ref().map(|r| r.performer.clone())),
+        seed: m.seed,
+    })
 }
 
 /// `--frames-csv`: one row per frame, empty fields where there is no figure.
