@@ -79,7 +79,7 @@ pub enum ManifestError {
     },
     #[error("{path}: not a suit manifest: {message}")]
     Format { path: PathBuf, message: String },
-    #[error("{file}: not the file {manifest} records (it was trained again after the regressor, or training stopped part-way): the regressor may not fit it; run `suitcap-train suit` on this suit again")]
+    #[error("{file}: not the file {manifest} records (a training stage ran again after it was written, or a training stopped part-way), so the suit's models may not fit together; run `suitcap-train suit` on this suit again")]
     Changed { file: PathBuf, manifest: PathBuf },
     #[error("{file}: missing, but {manifest} records it; restore it or run `suitcap-train suit` on this suit again")]
     Missing { file: PathBuf, manifest: PathBuf },

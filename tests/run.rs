@@ -186,6 +186,72 @@ fn a_truncated_model_file_is_a_clear_error() {
 }
 
 #[test]
+fn a_model_file_that_is_not_the_one_the_manifest_records_is_refused_by_name() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let suit = tmp.path().join("suit");
+    std::fs::create_dir(&suit).expect("mkdir");
+    for name in [
+        "suit.toml",
+        "segmenter.bin",
+        "codebook_fc.bin",
+        "codebook_hog.bin",
+        "codebook_silhouette.bin",
+        "regressor.bin",
+        "skeleton.bvh",
+    ] {
+        std::fs::copy(repo("suits/default").join(name), suit.join(name)).expect("copy");
+    }
+    // A manifest whose regressor is another one than the suit's (a stage re-run after it).
+    let mut files = suitcap::manifest::record_files(&suit).expect("checksums");
+    files.insert("regressor.bin".into(), "0123456789abcdef".into());
+    let manifest = suitcap::manifest::Manifest {
+        format: suitcap::manifest::MANIFEST_FORMAT,
+        tool: "test".into(),
+        descriptor: "fc+hog+box".into(),
+        rotations: "matrix".into(),
+        basis_candidates: 1,
+        relevance_vectors: 1,
+        kernel_width: 1.0,
+        noise: 1.0,
+        training_frames: 1,
+        dataset_paths: Vec::new(),
+        datasets: Vec::new(),
+        files,
+    };
+    std::fs::write(suit.join("model.toml"), manifest.to_toml().expect("toml")).expect("write");
+    let output = suitcap()
+        .args(["check", "--suit"])
+        .arg(&suit)
+        .output()
+        .expect("runs");
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("regressor.bin: not the file") && stderr.contains("model.toml"),
+        "{stderr}"
+    );
+    // With the right checksum the same suit passes.
+    std::fs::write(
+        suit.join("model.toml"),
+        suitcap::manifest::Manifest {
+            files: suitcap::manifest::record_files(&suit).expect("checksums"),
+            ..manifest
+        }
+        .to_toml()
+        .expect("toml"),
+    )
+    .expect("write");
+    let passed = succeeded(
+        suitcap()
+            .args(["check", "--suit"])
+            .arg(&suit)
+            .output()
+            .expect("runs"),
+    );
+    assert!(passed.contains("6 checksums match"), "{passed}");
+}
+
+#[test]
 fn check_loads_the_trained_models() {
     let check = |suit: &Path| {
         succeeded(

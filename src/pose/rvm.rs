@@ -984,6 +984,20 @@ impl Rvm {
         outputs: usize,
         options: &TrainOptions,
     ) -> Result<(Rvm, TrainReport), RvmError> {
+        Rvm::train_with_progress(x, n, dim, y, outputs, options, &mut |_, _| {})
+    }
+
+    /// [`Rvm::train`], calling `progress(iteration, active basis functions)` as each add /
+    /// re-estimate / delete iteration starts (for a progress bar).
+    pub fn train_with_progress(
+        x: &[f32],
+        n: usize,
+        dim: usize,
+        y: &[f32],
+        outputs: usize,
+        options: &TrainOptions,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<(Rvm, TrainReport), RvmError> {
         let start = Instant::now();
         validate(x, n, dim, y, outputs, options)?;
         let v = outputs;
@@ -1081,6 +1095,7 @@ impl Rvm {
         let mut since_beta = 0;
         while iterations < options.max_iterations {
             iterations += 1;
+            progress(iterations, fit.active.len());
             let evals: Vec<Eval> = (0..p)
                 .into_par_iter()
                 .map(|q| fit.evaluate(q, vf))
@@ -1286,6 +1301,30 @@ mod tests {
         );
         assert!(report.log_marginal_likelihood.is_finite());
         assert_eq!(report.relevance_vectors, model.len());
+    }
+
+    #[test]
+    fn progress_is_reported_every_iteration_and_ends_where_the_report_does() {
+        let (x, y) = sinc_data(0.1, 1);
+        let mut seen = Vec::new();
+        let (model, report) = Rvm::train_with_progress(
+            &x,
+            100,
+            1,
+            &y,
+            1,
+            &TrainOptions::new(100, 2.0),
+            &mut |iteration, active| seen.push((iteration, active)),
+        )
+        .expect("trains");
+        assert_eq!(seen.len(), report.iterations);
+        assert!(seen.iter().enumerate().all(|(k, &(i, _))| i == k + 1));
+        // The last count of active basis functions is the relevance vectors and maybe the bias.
+        let last = seen.last().map_or(0, |s| s.1);
+        assert!(
+            last == model.len() || last == model.len() + 1,
+            "{last} {report:?}"
+        );
     }
 
     #[test]

@@ -492,6 +492,10 @@ fn codebooks(
     };
     let sc_len = silhouette::SC_RADIAL * silhouette::SC_ANGULAR;
     let kmeans_started = std::time::Instant::now();
+    // k-means has no iterations to count from here: the codebooks in turn.
+    let bar = progress_bar(3, "k-means codebooks {pos}/{len}: {msg} [{elapsed}]");
+    bar.enable_steady_tick(std::time::Duration::from_millis(250));
+    bar.set_message("Feature Context");
     let (fc_book, fc_inertia) = Codebook::train(
         "Feature Context",
         &fc,
@@ -500,8 +504,12 @@ fn codebooks(
         max_vectors,
         seed,
     )?;
+    bar.inc(1);
+    bar.set_message("HOG");
     let (hog_book, hog_inertia) =
         Codebook::train("HOG", &hog, HOG_BINS, HOG_CENTRES, max_vectors, seed)?;
+    bar.inc(1);
+    bar.set_message("silhouette");
     let (sc_book, sc_inertia) = Codebook::train(
         "silhouette",
         &sc,
@@ -510,6 +518,7 @@ fn codebooks(
         max_vectors,
         seed,
     )?;
+    bar.finish_and_clear();
     Codebooks {
         fc: fc_book,
         hog: hog_book,
@@ -769,8 +778,13 @@ impl TrainingData {
             .map(|d| d.manifest.clip.name.as_str())
             .collect();
         let (clip_of, clips) = clip_indices(&names);
+        let bar = progress_bar(
+            datasets.len(),
+            "training descriptors: datasets {pos}/{len} [{elapsed}, {eta} left]",
+        );
         for (dataset, &clip) in datasets.iter().zip(&clip_of) {
             let (x, y, n) = training_set(dataset, suit, codebooks, kinds, segmenter, rotations)?;
+            bar.inc(1);
             if n == 0 {
                 continue;
             }
@@ -791,6 +805,7 @@ impl TrainingData {
                 }
             }
         }
+        bar.finish_and_clear();
         let trained = sets.first().map_or(0, |set| set.x.len() / set.dim);
         if trained < 10 {
             bail!(
@@ -818,14 +833,24 @@ impl TrainingData {
             tolerance: 1e-3,
             seed,
         };
-        Ok(Rvm::train(
+        let bar = progress_bar(
+            options.max_iterations,
+            "RVM iterations (at most) {pos}/{len}, {msg} [{elapsed}]",
+        );
+        let result = Rvm::train_with_progress(
             &x,
             x.len() / self.dim,
             self.dim,
             &y,
             self.layout.len(),
             &options,
-        )?)
+            &mut |iteration, active| {
+                bar.set_position(iteration as u64);
+                bar.set_message(format!("{active} basis functions"));
+            },
+        );
+        bar.finish_and_clear();
+        Ok(result?)
     }
 
     fn frames(&self) -> usize {
@@ -839,7 +864,9 @@ impl TrainingData {
         let n = self.x.len() / self.dim;
         let median = median_distance(&self.x, n, self.dim, seed);
         let mut best = (f64::INFINITY, median);
-        for factor in [0.25f32, 0.5, 1.0, 2.0] {
+        let factors = [0.25f32, 0.5, 1.0, 2.0];
+        let bar = progress_bar(factors.len(), "kernel widths {pos}/{len} [{elapsed}]");
+        for factor in factors {
             let w = median * factor;
             let options = TrainOptions {
                 basis: basis.min(500),
@@ -851,14 +878,19 @@ impl TrainingData {
             let (rvm, report) =
                 Rvm::train(&self.x, n, self.dim, &self.y, self.layout.len(), &options)?;
             let error = pose_vector_error(&rvm, &self.layout, &self.held_x, &self.held_y);
-            println!(
-                "  width {w:.4} ({factor} × median): {} relevance vectors, held-back angle error {error:.2}°",
-                report.relevance_vectors
-            );
+            // `suspend`, not `println`: the latter prints nothing where the bar is hidden (a log).
+            bar.suspend(|| {
+                println!(
+                    "  width {w:.4} ({factor} × median): {} relevance vectors, held-back angle error {error:.2}°",
+                    report.relevance_vectors
+                )
+            });
+            bar.inc(1);
             if error < best.0 {
                 best = (error, w);
             }
         }
+        bar.finish_and_clear();
         Ok(best.1)
     }
 }
@@ -1163,6 +1195,16 @@ struct FrameError {
     root_cm: Option<f64>,
     root_px: Option<f64>,
     root_px_regressed: Option<f64>,
+}
+
+/// A progress bar of `len` steps drawn with `template` (indicatif's; `{pos}`, `{len}`, `{msg}`,
+/// `{elapsed}`, `{eta}`), on standard error where that is a terminal.
+fn progress_bar(len: usize, template: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(template) {
+        bar.set_style(style);
+    }
+    bar
 }
 
 /// What the suit's manifest records of a training dataset: its directory's name, its frames, and
