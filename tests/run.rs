@@ -138,21 +138,28 @@ fn eval_writes_the_per_joint_table_and_its_bar_chart() {
     assert!(image.pixels().any(|p| p.0 == [0x1f, 0x77, 0xb4]));
 }
 
+/// A suit directory `dir/suit` holding the shipped suit's definition and `models` (no manifest).
+fn copied_suit(dir: &Path, models: &[&str]) -> PathBuf {
+    let suit = dir.join("suit");
+    std::fs::create_dir(&suit).expect("mkdir");
+    for name in std::iter::once(&"suit.toml").chain(models) {
+        std::fs::copy(repo("suits/default").join(name), suit.join(name)).expect("copy");
+    }
+    suit
+}
+
+const MODEL_FILES_BUT_THE_REGRESSOR: [&str; 5] = [
+    "segmenter.bin",
+    "codebook_fc.bin",
+    "codebook_hog.bin",
+    "codebook_silhouette.bin",
+    "skeleton.bvh",
+];
+
 #[test]
 fn a_truncated_model_file_is_a_clear_error() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let suit = tmp.path().join("suit");
-    std::fs::create_dir(&suit).expect("mkdir");
-    for name in [
-        "suit.toml",
-        "segmenter.bin",
-        "codebook_fc.bin",
-        "codebook_hog.bin",
-        "codebook_silhouette.bin",
-        "skeleton.bvh",
-    ] {
-        std::fs::copy(repo("suits/default").join(name), suit.join(name)).expect("copy");
-    }
+    let suit = copied_suit(tmp.path(), &MODEL_FILES_BUT_THE_REGRESSOR);
     let bytes = std::fs::read(repo("suits/default/regressor.bin")).expect("read");
     std::fs::write(suit.join("regressor.bin"), &bytes[..bytes.len() / 3]).expect("write");
     let data = generated_clip(&tmp.path().join("clip"));
@@ -188,19 +195,12 @@ fn a_truncated_model_file_is_a_clear_error() {
 #[test]
 fn a_model_file_that_is_not_the_one_the_manifest_records_is_refused_by_name() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let suit = tmp.path().join("suit");
-    std::fs::create_dir(&suit).expect("mkdir");
-    for name in [
-        "suit.toml",
-        "segmenter.bin",
-        "codebook_fc.bin",
-        "codebook_hog.bin",
-        "codebook_silhouette.bin",
-        "regressor.bin",
-        "skeleton.bvh",
-    ] {
-        std::fs::copy(repo("suits/default").join(name), suit.join(name)).expect("copy");
-    }
+    let suit = copied_suit(tmp.path(), &MODEL_FILES_BUT_THE_REGRESSOR);
+    std::fs::copy(
+        repo("suits/default/regressor.bin"),
+        suit.join("regressor.bin"),
+    )
+    .expect("copy");
     // A manifest whose regressor is another one than the suit's (a stage re-run after it).
     let mut files = suitcap::manifest::record_files(&suit).expect("checksums");
     files.insert("regressor.bin".into(), "0123456789abcdef".into());
