@@ -21,15 +21,19 @@ use serde::{Deserialize, Serialize};
 pub const MANIFEST_FILE: &str = "model.toml";
 /// The format this build writes; format 1 (before the checksums) is read but not checked.
 pub const MANIFEST_FORMAT: u32 = 2;
-/// The model files a manifest records, where the suit has them.
-pub const MODEL_FILES: [&str; 6] = [
-    crate::segment::tables::SEGMENTER_FILE,
-    "codebook_fc.bin",
-    "codebook_hog.bin",
-    "codebook_silhouette.bin",
-    crate::pose::regressor::REGRESSOR_FILE,
-    crate::pose::regressor::SKELETON_FILE,
-];
+/// The model files a manifest records, where the suit has them: the segmenter tables, the three
+/// codebooks, the regressor and its skeleton.
+pub fn model_files() -> [String; 6] {
+    use crate::descriptor::{FC_CODEBOOK, HOG_CODEBOOK, SILHOUETTE_CODEBOOK};
+    [
+        crate::segment::tables::SEGMENTER_FILE.to_string(),
+        format!("{FC_CODEBOOK}.bin"),
+        format!("{HOG_CODEBOOK}.bin"),
+        format!("{SILHOUETTE_CODEBOOK}.bin"),
+        crate::pose::regressor::REGRESSOR_FILE.to_string(),
+        crate::pose::regressor::SKELETON_FILE.to_string(),
+    ]
+}
 
 /// One training dataset as the manifest records it: its directory's name and, for a generated
 /// one, what its own manifest says it was made from.
@@ -90,14 +94,14 @@ pub fn checksum(bytes: &[u8]) -> String {
     format!("{:016x}", crate::model::fnv1a(bytes))
 }
 
-/// The checksums of the suit's model files that exist ([`MODEL_FILES`]).
+/// The checksums of the suit's model files that exist ([`model_files`]).
 pub fn record_files(suit_dir: &Path) -> Result<BTreeMap<String, String>, ManifestError> {
     let mut files = BTreeMap::new();
-    for name in MODEL_FILES {
-        let path = suit_dir.join(name);
+    for name in model_files() {
+        let path = suit_dir.join(&name);
         match std::fs::read(&path) {
             Ok(bytes) => {
-                files.insert(name.to_string(), checksum(&bytes));
+                files.insert(name, checksum(&bytes));
             }
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
             Err(source) => return Err(ManifestError::Io { path, source }),
@@ -203,6 +207,19 @@ mod tests {
             }],
             files,
         }
+    }
+
+    #[test]
+    fn the_model_files_are_the_ones_the_loaders_read() {
+        let suit = Path::new("suit");
+        let files = model_files();
+        assert_eq!(files[0], crate::segment::tables::SEGMENTER_FILE);
+        assert_eq!(
+            suit.join(&files[1]),
+            crate::descriptor::codebook::codebook_path(suit, crate::descriptor::FC_CODEBOOK)
+        );
+        assert_eq!(files[2], "codebook_hog.bin");
+        assert_eq!(files[3], "codebook_silhouette.bin");
     }
 
     #[test]
