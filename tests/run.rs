@@ -267,6 +267,8 @@ fn check_loads_the_trained_models() {
         shipped.contains("trained models load") && shipped.contains("relevance vectors"),
         "{shipped}"
     );
+    // Its files are the ones `train.sh` left, as its manifest records them.
+    assert!(shipped.contains("(6 checksums match)"), "{shipped}");
     // A suit defined but not trained yet is fine, and says what to do; so is one part-way through
     // training (the segmenter only).
     let tmp = tempfile::tempdir().expect("tempdir");
