@@ -44,6 +44,12 @@ fn bench(c: &mut Criterion) {
             .scale_motion(&motion)
             .resample(CMU_CALIBRATION_FRAMES, None, settings.fps as f64)
             .expect("resample");
+        if !speed_only {
+            let (hands, feet) = suitcap::cloth::solver::peak_limb_speeds(&frames);
+            println!(
+                "{clip_name}: hands up to {hands:.1} m/s, feet up to {feet:.1} m/s between frames"
+            );
+        }
         // Quality figures: the dressed garment run over the clip, its summary printed
         // (CLOTH_BENCH_SPEED_ONLY=1 leaves them out, for timing runs).
         let report = |label: String, mesh: &GarmentMesh, settings: &SolverSettings| {

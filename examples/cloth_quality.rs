@@ -142,6 +142,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (frames, _) =
             rig.scale_motion(&motion)
                 .resample(first_frame, None, settings.fps as f64)?;
+        // The limbs' speed, for the "no tunnelling at 3 m/s hand speed" of issue 6.
+        let (hands, feet) = suitcap::cloth::solver::peak_limb_speeds(&frames);
+        println!(
+            "{clip_name}: hands up to {hands:.1} m/s, feet up to {feet:.1} m/s between frames"
+        );
         for &kind in &kinds {
             for &target in &counts {
                 let size = if quality_mode {

@@ -229,6 +229,22 @@ impl Motion {
         &self.values[index * n..(index + 1) * n]
     }
 
+    /// The fastest joint `name` moves between two consecutive frames, in the file's units per
+    /// second (centimetres for the shipped clips); `None` if the skeleton has no such joint or the
+    /// motion fewer than two frames. For the cloth benchmark's "hand speed" (a fast limb that a
+    /// garment must not let through).
+    pub fn peak_joint_speed(&self, name: &str) -> Option<f32> {
+        let joint = self.skeleton.find(name)?;
+        let positions: Vec<_> = self
+            .frames()
+            .map(|f| self.skeleton.joint_positions(f)[joint])
+            .collect();
+        positions
+            .windows(2)
+            .map(|w| w[0].distance(w[1]) * self.frame_rate() as f32)
+            .reduce(f32::max)
+    }
+
     pub fn frames(&self) -> impl ExactSizeIterator<Item = &[f32]> + '_ {
         self.values
             .chunks_exact(self.skeleton.channel_count().max(1))
@@ -534,6 +550,18 @@ mod tests {
 
     fn tiny() -> Motion {
         Motion::parse(TINY.as_bytes(), Path::new("tiny.bvh")).expect("tiny parses")
+    }
+
+    #[test]
+    fn peak_joint_speed_is_the_fastest_step_times_the_frame_rate() {
+        // The hip moves 1 unit along Z a frame at 120 frames/s, unrotated, so the knee below it
+        // moves with it; the knee's own turn moves only what hangs from it.
+        let m = tiny();
+        let hip = m.peak_joint_speed("hip").expect("hip");
+        assert!((hip - 120.0).abs() < 0.01, "{hip}");
+        let knee = m.peak_joint_speed("knee").expect("knee");
+        assert!((knee - 120.0).abs() < 0.01, "{knee}");
+        assert_eq!(m.peak_joint_speed("nose"), None);
     }
 
     #[test]

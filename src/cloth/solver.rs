@@ -2036,6 +2036,22 @@ impl fmt::Display for QualitySummary {
     }
 }
 
+/// How fast the hands and the feet move between the frames of `motion` (the frames the cloth is
+/// given), metres per second: the fastest of the CMU/Daz `rHand`/`lHand` and of `rFoot`/`lFoot`
+/// (0 where the skeleton has neither). Issue 6 asks for no tunnelling at 3 m/s hand speed; the
+/// benchmark prints these beside its quality figures, and
+/// `a_fast_capsule_does_not_tunnel_through_a_hanging_sheet` tests the solver at that speed.
+pub fn peak_limb_speeds(motion: &Motion) -> (f32, f32) {
+    let peak = |joints: [&str; 2]| {
+        joints
+            .iter()
+            .filter_map(|j| motion.peak_joint_speed(j))
+            .fold(0.0f32, f32::max)
+            / 100.0
+    };
+    (peak(["rHand", "lHand"]), peak(["rFoot", "lFoot"]))
+}
+
 /// Dresses `cloth` on the first frame of `motion` (frames on the rig's skeleton) and simulates the
 /// rest, calling `on_frame(index, cloth, quality)` after each frame; returns the summary. A motion
 /// whose frame rate differs from the solver's is stepped by its own frame time with fixed substeps.
