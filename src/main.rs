@@ -674,8 +674,8 @@ fn describe(
     truth_markers: Option<&PathBuf>,
 ) -> anyhow::Result<()> {
     use suitcap::descriptor::markers::{
-        match_tolerance, score_markers, MarkerScore, TruthMarker, COUNTED_VISIBLE_FRACTION,
-        COUNTED_VISIBLE_PX,
+        match_markers, match_tolerance, score_matching, MarkerScore, TruthMarker,
+        COUNTED_VISIBLE_FRACTION, COUNTED_VISIBLE_PX,
     };
     use suitcap::descriptor::{Codebooks, Describer, DescriptorKind};
     let kind = DescriptorKind::parse(descriptor).with_context(|| {
@@ -752,20 +752,21 @@ fn describe(
         }
         if let Some(truth) = &truth {
             let expected = TruthMarker::of_frame(truth, frame.index as usize, &suit);
-            let tolerance = match_tolerance(&expected);
-            score.add(score_markers(
-                &markers,
+            // One matching, scored under both counts.
+            let (matched, used) = match_markers(&markers, &expected, match_tolerance(&expected));
+            score.add(score_matching(
+                &matched,
+                &used,
                 &expected,
                 COUNTED_VISIBLE_FRACTION,
                 0,
-                tolerance,
             ));
-            score_px.add(score_markers(
-                &markers,
+            score_px.add(score_matching(
+                &matched,
+                &used,
                 &expected,
                 COUNTED_VISIBLE_FRACTION,
                 COUNTED_VISIBLE_PX,
-                tolerance,
             ));
         }
         frames += 1;

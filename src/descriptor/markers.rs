@@ -857,17 +857,30 @@ pub fn score_markers(
     tolerance: f32,
 ) -> MarkerScore {
     let (truth_matched, used) = match_markers(detected, truth, tolerance);
+    score_matching(&truth_matched, &used, truth, min_fraction, min_px)
+}
+
+/// The score of one matching ([`match_markers`]: which truth markers and which detections were
+/// matched) with the truth markers counted as [`score_markers`] counts them, so that one matching
+/// can be scored under several counts.
+pub fn score_matching(
+    truth_matched: &[bool],
+    used: &[bool],
+    truth: &[TruthMarker],
+    min_fraction: f32,
+    min_px: u32,
+) -> MarkerScore {
     let mut score = MarkerScore {
-        detections: detected.len(),
+        detections: used.len(),
+        correct: used.iter().filter(|&&u| u).count(),
         ..MarkerScore::default()
     };
-    for (t, tm) in truth.iter().enumerate() {
+    for (tm, &matched) in truth.iter().zip(truth_matched) {
         if tm.counts(min_fraction, min_px) {
             score.truth += 1;
-            score.found += truth_matched[t] as usize;
+            score.found += matched as usize;
         }
     }
-    score.correct = used.iter().filter(|&&u| u).count();
     score
 }
 
@@ -965,6 +978,11 @@ mod tests {
         let (truth_matched, detection_matched) = match_markers(&detected, &truth, 2.0);
         assert_eq!(truth_matched, vec![true, false, true]);
         assert_eq!(detection_matched, vec![true, false, true]);
+        // One matching scored under two counts: as score_markers, and with the partial one too.
+        let scored =
+            |fraction| score_matching(&truth_matched, &detection_matched, &truth, fraction, 4);
+        assert_eq!(scored(0.6), score);
+        assert_eq!((scored(0.2).truth, scored(0.2).found), (3, 2));
     }
 
     #[test]
