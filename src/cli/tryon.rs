@@ -685,6 +685,7 @@ pub fn drape(
     let mut options = ClothOptions::new(GarmentChoice::parse(&garment.garment)?, mode);
     options.material = material(&garment.material)?;
     options.known_size = Some(size);
+    options.check_tunnelling = true;
     let mut stage = ClothStage::new(&template, options)?;
     let mut render = RenderStage::new(RenderSettings::default(), Vec::new());
     let overlays = parse_overlays(&garment.overlays)?;
@@ -742,6 +743,17 @@ pub fn drape(
     let (p95_worst, p95_frame) = worst(|q| q.strain_p95);
     let (strain_max, strain_frame) = worst(|q| q.strain_max);
     let (depth_max, depth_frame) = worst(|q| q.penetration_cm);
+    // Vertices that tunnelled through the body: while the garment was put on (in the first
+    // frame's figure), and in the frames after it.
+    let tunnelled = |frames: &[(usize, suitcap::cloth::solver::FrameQuality)]| {
+        frames
+            .iter()
+            .filter_map(|(k, q)| Some((*k, q.tunnelled? as usize)))
+            .filter(|&(_, n)| n > 0)
+            .collect::<Vec<_>>()
+    };
+    let (dressing, moving) = quality.split_at(quality.len().min(1));
+    let (dressing, moving) = (tunnelled(dressing), tunnelled(moving));
     println!(
         "{} frames of {} ({} vertices, {:?} mode, {}) → {}/frames/ and {}/preview.gif; {} unreadable frames skipped",
         quality.len(),
@@ -765,6 +777,16 @@ pub fn drape(
         strain_frame,
         depth_max * 10.0,
         depth_frame
+    );
+    println!(
+        "tunnelling: {} vertices passed through the body in {} frames{}; {} while the garment was put on",
+        moving.iter().map(|&(_, n)| n).sum::<usize>(),
+        moving.len(),
+        match moving.iter().max_by_key(|&&(_, n)| n) {
+            Some((k, n)) => format!(" (most in frame {k}: {n})"),
+            None => String::new(),
+        },
+        dressing.iter().map(|&(_, n)| n).sum::<usize>()
     );
     println!(
         "time: cloth {:.2} ms, render + composite {:.2} ms per frame (medians)",

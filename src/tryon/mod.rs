@@ -97,6 +97,9 @@ pub struct ClothOptions {
     pub known_size: Option<BodySize>,
     /// Garment edge length instead of the mode's (cm).
     pub edge_cm: Option<f32>,
+    /// Count the vertices that tunnel through the body ([`Cloth::check_tunnelling`]) into each
+    /// frame's quality figures: for `drape`, where time does not matter.
+    pub check_tunnelling: bool,
 }
 
 impl ClothOptions {
@@ -111,6 +114,7 @@ impl ClothOptions {
             },
             known_size: None,
             edge_cm: None,
+            check_tunnelling: false,
         }
     }
 
@@ -333,12 +337,13 @@ impl ClothStage {
                 })?
             }
         };
-        let cloth = Cloth::new(
+        let mut cloth = Cloth::new(
             &mesh,
             &self.options.material,
             &self.options.solver_settings(),
             &rig,
         )?;
+        cloth.check_tunnelling(self.options.check_tunnelling);
         Ok(Simulation {
             triangles: Arc::new(cloth.triangles().to_vec()),
             rig,
