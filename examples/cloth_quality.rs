@@ -21,7 +21,8 @@
 //! frames of a raw CMU capture at 120 frames/s, none of a 30 frames/s clip; `CLOTH_FIRST_FRAME`
 //! to choose); `CLOTH_SUBJECT`: another built-in
 //! subject than chidi, or `motion` for the clip's own skeleton at girth 1 (what `suitcap drape`
-//! wears without masks). `CLOTH_GARMENTS`: other garments than the T-shirt and the dress, e.g.
+//! wears without masks; `CLOTH_HEIGHT_SCALE` and `CLOTH_GIRTH` size it as `drape --masks` prints,
+//! e.g. 1.017 and 1.19 for the demo clip on the segmenter's masks). `CLOTH_GARMENTS`: other garments than the T-shirt and the dress, e.g.
 //! `skirt`. Each case counts the vertices that tunnel through a capsule in any substep
 //! (`Cloth::check_tunnelling`, "tunnelled N (M frames; D dressing)": in the motion's frames after
 //! the first, and while the garment was put on); `CLOTH_NO_TUNNEL_CHECK=1` leaves the count out
@@ -131,7 +132,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (clip_name, clip) in clips {
         let motion = Motion::load(&repo.join(clip))?;
         let rig = if subject_name == "motion" {
-            let (subject, skeleton) = BodySize::TEMPLATE.subject(&motion.skeleton);
+            let size = BodySize {
+                height_scale: env("CLOTH_HEIGHT_SCALE").unwrap_or(1.0),
+                girth: env("CLOTH_GIRTH").unwrap_or(1.0),
+                ..BodySize::TEMPLATE
+            };
+            let (subject, skeleton) = size.subject(&motion.skeleton);
             let body = Body::new(&subject, &skeleton)?;
             BodyRig::new(skeleton, body, DEFAULT_MARGIN_CM)
         } else {
