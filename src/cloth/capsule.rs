@@ -350,6 +350,25 @@ mod tests {
         assert!(close(s.normal.length(), 1.0));
     }
 
+    /// A tapered capsule at a slant to every axis.
+    fn slanted() -> Capsule {
+        Capsule::new(
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(-4.0, 9.0, 1.0),
+            2.5,
+            1.2,
+        )
+    }
+
+    /// A linear congruential generator of coordinates in [−12, 12).
+    fn uniform_in_24_cm(seed: u32) -> impl FnMut() -> f32 {
+        let mut state = seed;
+        move || {
+            state = state.wrapping_mul(1664525).wrapping_add(1013904223);
+            (state >> 8) as f32 / (1u32 << 24) as f32 * 24.0 - 12.0
+        }
+    }
+
     #[test]
     fn a_path_through_the_capsule_passes_and_one_beside_or_into_it_does_not() {
         // A cylinder of radius 4 along Y from 0 to 20.
@@ -376,18 +395,8 @@ mod tests {
 
     #[test]
     fn path_passes_through_agrees_with_a_dense_sampling() {
-        let c = Capsule::new(
-            Vec3::new(1.0, 2.0, 3.0),
-            Vec3::new(-4.0, 9.0, 1.0),
-            2.5,
-            1.2,
-        )
-        .prepared();
-        let mut state = 777u32;
-        let mut rnd = || {
-            state = state.wrapping_mul(1664525).wrapping_add(1013904223);
-            (state >> 8) as f32 / (1u32 << 24) as f32 * 24.0 - 12.0
-        };
+        let c = slanted().prepared();
+        let mut rnd = uniform_in_24_cm(777);
         let (mut passes, mut checked) = (0, 0);
         for _ in 0..2000 {
             let from = Vec3A::new(rnd(), rnd(), rnd());
@@ -412,17 +421,8 @@ mod tests {
     #[test]
     fn distance_is_consistent_with_closest_and_brute_force() {
         // Against a brute-force minimum over the union of spheres along the axis (which is the hull).
-        let c = Capsule::new(
-            Vec3::new(1.0, 2.0, 3.0),
-            Vec3::new(-4.0, 9.0, 1.0),
-            2.5,
-            1.2,
-        );
-        let mut state = 12345u32;
-        let mut rnd = || {
-            state = state.wrapping_mul(1664525).wrapping_add(1013904223);
-            (state >> 8) as f32 / (1u32 << 24) as f32 * 24.0 - 12.0
-        };
+        let c = slanted();
+        let mut rnd = uniform_in_24_cm(12345);
         for _ in 0..200 {
             let p = Vec3::new(rnd(), rnd() + 5.0, rnd());
             let exact = c.signed_distance(p);
