@@ -22,8 +22,8 @@
 //! to choose); `CLOTH_SUBJECT`: another built-in
 //! subject than chidi, or `motion` for the clip's own skeleton at girth 1 (what `suitcap drape`
 //! wears without masks; `CLOTH_HEIGHT_SCALE` and `CLOTH_GIRTH` size it as `drape --masks` prints,
-//! e.g. 1.017 and 1.19 for the demo clip on the segmenter's masks). `CLOTH_GARMENTS`: other garments than the T-shirt and the dress, e.g.
-//! `skirt`. Each case counts the vertices that tunnel through a capsule in any substep
+//! e.g. 1.017 and 1.19 for the demo clip on the segmenter's masks). `CLOTH_GARMENTS`: other
+//! garments than the T-shirt and the dress, e.g. `skirt`. Each case counts the vertices that tunnel through a capsule in any substep
 //! (`Cloth::check_tunnelling`, "tunnelled N (M frames; D dressing)": in the motion's frames after
 //! the first, and while the garment was put on); `CLOTH_NO_TUNNEL_CHECK=1` leaves the count out
 //! ("tunnelled -"), which the frames/s need. The frames/s printed are from `run_motion`'s
