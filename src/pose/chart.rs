@@ -2,7 +2,7 @@
 //! per joint, one bar per series (a method, or a measure such as Euler and geodesic error), and a
 //! last group with each series' mean.
 //!
-//! One [`Layout`] places everything; [`BarChart::svg`] writes it as SVG text (the experiments'
+//! One `Layout` places everything; [`BarChart::svg`] writes it as SVG text (the experiments'
 //! chart, for documents) and [`BarChart::image`] draws it with tiny-skia into an RGB image, which
 //! `suitcap-train eval --chart` saves as PNG. The image's text uses the overlays' 5×7 bitmap font
 //! ([`crate::composite::font`]), the joints' names rotated as in the SVG.
@@ -212,7 +212,7 @@ impl BarChart {
         svg
     }
 
-    /// The chart drawn into an image, [`IMAGE_SCALE`] pixels per SVG unit.
+    /// The chart drawn into an image, `IMAGE_SCALE` pixels per SVG unit.
     pub fn image(&self) -> RgbImage {
         let l = Layout::new(self);
         let s = IMAGE_SCALE;
