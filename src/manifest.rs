@@ -123,20 +123,16 @@ impl Manifest {
 
     /// Parses `model.toml` text; `path` names it in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Manifest, ManifestError> {
-        // Format 1 wrote `datasets` as a list of paths; read it under its own name.
-        let mut value: toml::Table = toml::from_str(text).map_err(|e| ManifestError::Format {
+        let format_error = |e: toml::de::Error| ManifestError::Format {
             path: path.to_owned(),
             message: e.to_string(),
-        })?;
+        };
+        // Format 1 wrote `datasets` as a list of paths; read it under its own name.
+        let mut value: toml::Table = toml::from_str(text).map_err(format_error)?;
         if let Some(paths @ toml::Value::Array(_)) = value.remove("datasets") {
             value.insert("dataset_paths".into(), paths);
         }
-        toml::Value::Table(value)
-            .try_into()
-            .map_err(|e: toml::de::Error| ManifestError::Format {
-                path: path.to_owned(),
-                message: e.to_string(),
-            })
+        toml::Value::Table(value).try_into().map_err(format_error)
     }
 
     /// The suit's manifest, `None` when it has none.
