@@ -125,6 +125,16 @@ fn a_corrupt_frame_is_skipped_and_named_and_an_empty_scene_hides_the_garment() {
     let data = generated_clip(&tmp.path().join("clip"), 12);
     let frames = data.join("frames");
     std::fs::write(frames.join("000006.png"), b"not a png").expect("corrupt");
+    // The last frame cut short (a copy interrupted), as a JPEG, whose decoder alone would fill
+    // the missing rows with grey and report nothing.
+    image::open(frames.join("000011.png"))
+        .expect("frame")
+        .to_rgb8()
+        .save(frames.join("000011.jpg"))
+        .expect("jpeg");
+    std::fs::remove_file(frames.join("000011.png")).expect("remove");
+    let jpeg = std::fs::read(frames.join("000011.jpg")).expect("read");
+    std::fs::write(frames.join("000011.jpg"), &jpeg[..jpeg.len() / 2]).expect("truncate");
     // Frame 9: nobody in view (a flat grey picture).
     image::RgbImage::from_pixel(640, 480, image::Rgb([128, 128, 128]))
         .save(frames.join("000009.png"))
@@ -134,11 +144,27 @@ fn a_corrupt_frame_is_skipped_and_named_and_an_empty_scene_hides_the_garment() {
     let message = text(&output);
     assert!(output.status.success(), "{message}");
     assert!(
-        message.contains("1 corrupt frames skipped") && message.contains("000006.png"),
+        message.contains("2 corrupt frames skipped")
+            && message.contains("000006.png")
+            && message.contains("000011.jpg")
+            && message.contains("truncated"),
         "{message}"
     );
-    assert_eq!(take_frames(&out.join("take.bvh")), 11);
+    // One BVH frame per input frame: the corrupt ones hold the pose before, so the take stays
+    // in step with the video.
+    let take = suitcap::bvh::Motion::load(&out.join("take.bvh")).expect("take");
+    assert_eq!(take.frame_count(), 12);
+    assert_eq!(take.frame(6), take.frame(5));
+    assert_eq!(take.frame(11), take.frame(10));
+    assert_ne!(take.frame(7), take.frame(6));
     let rows = std::fs::read_to_string(out.join("frames.csv")).expect("frames.csv");
+    assert_eq!(rows.lines().count(), 13, "{rows}");
+    for k in [6, 11] {
+        assert!(
+            rows.lines().any(|l| l == format!("{k},,,skipped,,,,,,,,")),
+            "{rows}"
+        );
+    }
     let empty = rows
         .lines()
         .find(|l| l.starts_with("9,"))
@@ -282,8 +308,9 @@ fn suit_pattern_writes_true_size_panels() {
 /// The live app in a virtual X display (CI installs Xvfb; without `xvfb-run` the test says so and
 /// passes, since the window needs a display): a recorded clip stands in for the camera, played at its
 /// rate; every frame is either shown and recorded or, when the machine falls behind (a live camera
-/// does not wait), counted as dropped, and the take is complete when the input ends. How many are
-/// dropped depends on how busy the machine is, so the test asks only that none goes missing.
+/// does not wait), counted as dropped and recorded with the pose before, and the take is complete
+/// when the input ends. How many are dropped depends on how busy the machine is, so the test asks
+/// only that none goes missing.
 #[test]
 fn live_shows_and_records_every_frame_of_a_paced_input() {
     let Ok(xvfb) = which("xvfb-run") else {
@@ -317,7 +344,12 @@ fn live_shows_and_records_every_frame_of_a_paced_input() {
     let dropped = count_before(" camera frames dropped").expect("the dropped count");
     assert!(shown > 0, "{message}");
     assert_eq!(shown + dropped, 12, "{message}");
-    assert_eq!(take_frames(&take), shown, "{message}");
+    // The take keeps the input's time: a dropped frame holds the pose before.
+    assert_eq!(take_frames(&take), 12, "{message}");
+    assert!(
+        message.contains(&format!("{dropped} of them hold the pose before")),
+        "{message}"
+    );
 }
 
 fn which(program: &str) -> Result<PathBuf, ()> {

@@ -219,28 +219,97 @@ impl TimingLog {
     }
 }
 
-/// A BVH take being recorded: one frame per processed video frame.
+/// A BVH take being recorded: one frame per input frame, so that BVH frame k is the pose of
+/// the take's k-th video frame. An input frame that never reached the pose stage (corrupt, or
+/// dropped by a live pipeline that was behind) gets the pose before it, as a frame with nobody
+/// in view does; without it every later BVH frame would be one frame early against the video.
 pub struct Take {
     motion: Motion,
     path: PathBuf,
+    /// The input frame the next BVH frame stands for; `None` until the first frame (a live take
+    /// starts at whichever frame is shown when recording starts).
+    next_index: Option<u64>,
+    /// BVH frames that hold the pose before for an input frame that had none.
+    held: usize,
 }
 
 impl Take {
-    pub fn new(pipeline: &PosePipeline, fps: f64, path: PathBuf) -> anyhow::Result<Take> {
-        let motion = Motion::new(
-            pipeline.regressor.skeleton.skeleton.clone(),
-            1.0 / fps,
-            Vec::new(),
-        )?;
-        Ok(Take { motion, path })
+    /// A take at `fps` on `skeleton`, written to `path`; its first BVH frame stands for input
+    /// frame `first_index` (0 for a recording) or, with `None`, for the first frame pushed.
+    pub fn new(
+        skeleton: &suitcap::skeleton::Skeleton,
+        fps: f64,
+        path: PathBuf,
+        first_index: Option<u64>,
+    ) -> anyhow::Result<Take> {
+        Ok(Take {
+            motion: Motion::new(skeleton.clone(), 1.0 / fps, Vec::new())?,
+            path,
+            next_index: first_index,
+            held: 0,
+        })
     }
 
-    pub fn push(&mut self, frame: &[f32]) -> anyhow::Result<()> {
-        Ok(self.motion.push_frame(frame)?)
+    /// Records the pose of input frame `index`, first holding the pose before (or, before the
+    /// first pose, this one) over the input frames between the last one pushed and it.
+    pub fn push(&mut self, index: u64, frame: &[f32]) -> anyhow::Result<()> {
+        self.hold_until(index, frame)?;
+        self.motion.push_frame(frame)?;
+        self.next_index = self.next_index.map(|next| next.max(index + 1));
+        Ok(())
+    }
+
+    /// Holds the last pose over the input frames after the last one pushed, up to the stream's
+    /// `input_frames` (the frames a recording ended with that never reached the pose stage).
+    /// Nothing to hold before the first pose.
+    pub fn hold_to_end(&mut self, input_frames: u64) -> anyhow::Result<()> {
+        match self.motion.frame_count() {
+            0 => Ok(()),
+            n => {
+                let last = self.motion.frame(n - 1).to_vec();
+                self.hold_until(input_frames, &last)
+            }
+        }
+    }
+
+    /// Fills the input frames from the next expected one up to `index` (exclusive) with the last
+    /// pose, or `fallback` before the first.
+    fn hold_until(&mut self, index: u64, fallback: &[f32]) -> anyhow::Result<()> {
+        let next = *self.next_index.get_or_insert(index);
+        let missing = index.saturating_sub(next);
+        if missing == 0 {
+            return Ok(());
+        }
+        let hold = match self.motion.frame_count() {
+            0 => fallback.to_vec(),
+            n => self.motion.frame(n - 1).to_vec(),
+        };
+        for _ in 0..missing {
+            self.motion.push_frame(&hold)?;
+        }
+        self.held += missing as usize;
+        self.next_index = Some(index);
+        Ok(())
     }
 
     pub fn frames(&self) -> usize {
         self.motion.frame_count()
+    }
+
+    /// BVH frames that hold the pose before for an input frame that never reached the pose stage.
+    pub fn held(&self) -> usize {
+        self.held
+    }
+
+    /// "recorded N frames → PATH", with the frames held over input that never reached the pose
+    /// stage.
+    fn recorded_line(&self, path: &Path) -> String {
+        format!(
+            "recorded {} frames → {} ({} of them hold the pose before, for frames the pipeline dropped or that were corrupt, so the take keeps the camera's time)",
+            self.frames(),
+            path.display(),
+            self.held
+        )
     }
 
     /// Writes the take (atomically) and returns its path.
@@ -255,6 +324,8 @@ struct RunOutputs {
     frames_dir: PathBuf,
     preview: Option<GifPreview>,
     rows: String,
+    /// The input frame the next row is for.
+    next_index: u64,
 }
 
 impl RunOutputs {
@@ -272,10 +343,22 @@ impl RunOutputs {
             rows: String::from(
                 "frame,person,markers,garment,strain_p95,penetration_cm,segment_ms,describe_ms,regress_ms,cloth_ms,render_ms,composite_ms\n",
             ),
+            next_index: 0,
         })
     }
 
+    /// Rows for the input frames before `index` that never reached the pipeline (corrupt): their
+    /// garment column says `skipped` and the rest is empty.
+    fn skipped_until(&mut self, index: u64) {
+        for k in self.next_index..index {
+            self.rows.push_str(&format!("{k},,,skipped,,,,,,,,\n"));
+        }
+        self.next_index = self.next_index.max(index);
+    }
+
     fn add(&mut self, out: &Output) -> anyhow::Result<()> {
+        self.skipped_until(out.index);
+        self.next_index = out.index + 1;
         let path = self.frames_dir.join(format!("{:06}.png", out.index));
         write_png(&out.image, &path)?;
         if let Some(preview) = &mut self.preview {
@@ -407,7 +490,8 @@ pub fn run(
     let total = count_frames(input);
     drop(probe);
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
-    let mut take = Take::new(&pose_stage.pipeline, fps, out.join("take.bvh"))?;
+    let template = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
+    let mut take = Take::new(&template, fps, out.join("take.bvh"), Some(0))?;
     let mut outputs = RunOutputs::new(out, fps)?;
     let controls = Controls::new(parse_overlays(&garment.overlays)?);
     stop_on_signals(&controls);
@@ -421,7 +505,6 @@ pub fn run(
     );
     let mut timings = TimingLog::default();
     let (mut nobody, mut failure) = (0usize, None::<anyhow::Error>);
-    let template = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
     let mut body_size = None;
     let mut garment_failures = GarmentFailures::default();
     let input_owned = input.to_owned();
@@ -452,7 +535,7 @@ pub fn run(
                 bar.suspend(|| eprintln!("{line}"));
             }
             let result = take
-                .push(&output.pose.frame)
+                .push(output.index, &output.pose.frame)
                 .and_then(|()| outputs.add(&output));
             bar.inc(1);
             match result {
@@ -465,9 +548,14 @@ pub fn run(
         },
     );
     bar.finish_and_clear();
+    // Corrupt frames at the end of a recording read to its end hold the last pose too.
+    if failure.is_none() && summary.source_error.is_none() && !summary.stopped_by_user {
+        take.hold_to_end(summary.input_frames)?;
+        outputs.skipped_until(summary.input_frames);
+    }
     let bvh = take.write()?;
     outputs.finish(out)?;
-    report(&summary, take.frames(), nobody, bvh, &timings);
+    report(&summary, &take, nobody, &timings);
     if let Some(size) = body_size {
         println!(
             "body size measured on the silhouettes of {} frames: {:.0} cm tall ({:.3} × the suit's skeleton), girth {:.2} (1 = the base figure's build); the garment is cut for it",
@@ -507,14 +595,16 @@ fn count_frames(input: &str) -> Option<u64> {
         .map(|files| files.len() as u64)
 }
 
-fn report(summary: &RunSummary, frames: usize, nobody: usize, bvh: &Path, timings: &TimingLog) {
+fn report(summary: &RunSummary, take: &Take, nobody: usize, timings: &TimingLog) {
     println!(
-        "{frames} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped; {} camera frames dropped; {:.1} s ({:.1} frames/s)",
-        bvh.display(),
+        "{} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped (their {} BVH frames hold the pose before); {} camera frames dropped; {:.1} s ({:.1} frames/s)",
+        take.frames(),
+        take.path.display(),
         summary.skipped.len(),
+        take.held(),
         summary.dropped,
         summary.seconds,
-        frames as f64 / summary.seconds.max(1e-9)
+        summary.frames as f64 / summary.seconds.max(1e-9)
     );
     for s in &summary.skipped {
         println!("  skipped: {s}");
@@ -868,11 +958,16 @@ pub fn live(
     // Recording: --record starts at once; R starts and stops; every stop writes its take.
     let base = record.cloned().unwrap_or_else(|| PathBuf::from("take.bvh"));
     let mut takes_written: Vec<(PathBuf, usize)> = Vec::new();
+    let template_pipeline_skeleton = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
     let mut recording: Option<Take> = match record {
-        Some(path) => Some(Take::new(&pose_stage.pipeline, rate, path.clone())?),
+        Some(path) => Some(Take::new(
+            &template_pipeline_skeleton,
+            rate,
+            path.clone(),
+            Some(0),
+        )?),
         None => None,
     };
-    let template_pipeline_skeleton = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
     let recording_flag = Arc::new(std::sync::atomic::AtomicBool::new(recording.is_some()));
     let banner_flag = Arc::clone(&recording_flag);
     let mut timings = TimingLog::default();
@@ -919,7 +1014,7 @@ pub fn live(
                 eprintln!("{line}");
             }
             if let Some(take) = &mut recording {
-                if let Err(e) = take.push(&output.pose.frame) {
+                if let Err(e) = take.push(output.index, &output.pose.frame) {
                     failure = Some(e);
                     return false;
                 }
@@ -952,7 +1047,7 @@ pub fn live(
                     Key::R => match recording.take() {
                         Some(take) => match take.write() {
                             Ok(path) => {
-                                println!("recorded {} frames → {}", take.frames(), path.display());
+                                println!("{}", take.recorded_line(path));
                                 takes_written.push((path.to_owned(), take.frames()));
                             }
                             Err(e) => {
@@ -962,7 +1057,7 @@ pub fn live(
                         },
                         None => {
                             let path = numbered(&base, takes_written.len());
-                            match Take::new_for(&template_pipeline_skeleton, rate, path) {
+                            match Take::new(&template_pipeline_skeleton, rate, path, None) {
                                 Ok(take) => recording = Some(take),
                                 Err(e) => eprintln!(
                                     "cannot start recording: {}",
@@ -979,9 +1074,13 @@ pub fn live(
             true
         },
     );
-    if let Some(take) = recording.take() {
+    if let Some(mut take) = recording.take() {
+        // Frames at the end of a recorded input that the pipeline dropped hold the last pose too.
+        if summary.source_error.is_none() && !summary.stopped_by_user {
+            take.hold_to_end(summary.input_frames)?;
+        }
         let path = take.write()?;
-        println!("recorded {} frames → {}", take.frames(), path.display());
+        println!("{}", take.recorded_line(path));
     }
     println!(
         "{} frames shown, {} camera frames dropped (the pipeline was behind), {} corrupt frames skipped",
@@ -1022,19 +1121,6 @@ fn numbered(base: &Path, index: usize) -> PathBuf {
     base.with_file_name(format!("{stem}-{}.bvh", index + 1))
 }
 
-impl Take {
-    fn new_for(
-        skeleton: &suitcap::skeleton::Skeleton,
-        fps: f64,
-        path: PathBuf,
-    ) -> anyhow::Result<Take> {
-        Ok(Take {
-            motion: Motion::new(skeleton.clone(), 1.0 / fps, Vec::new())?,
-            path,
-        })
-    }
-}
-
 /// Frames of a directory decoded into memory (for the benchmark).
 pub fn load_frames(dir: &Path) -> anyhow::Result<Vec<RgbImage>> {
     let mut source = suitcap::source::directory::DirectorySource::open(dir, 30.0)?;
@@ -1061,5 +1147,51 @@ mod tests {
         assert!(failures.note(11, "other").is_some());
         assert!(failures.note(12, a).is_some());
         assert_eq!(failures.frames, 4);
+    }
+
+    /// The take's frames as their first channel (each test frame is `[k; 6]`).
+    fn firsts(take: &Take) -> Vec<f32> {
+        take.motion.frames().map(|f| f[0]).collect()
+    }
+
+    #[test]
+    fn a_take_holds_the_pose_before_over_missing_input_frames() {
+        use suitcap::skeleton::{Channel, Joint, Skeleton};
+        let skeleton = Skeleton::new(vec![Joint {
+            name: "hip".into(),
+            parent: None,
+            offset: glam::Vec3::ZERO,
+            channels: vec![
+                Channel::Xposition,
+                Channel::Yposition,
+                Channel::Zposition,
+                Channel::Zrotation,
+                Channel::Xrotation,
+                Channel::Yrotation,
+            ],
+            first_channel: 0,
+            end_site: Some(glam::Vec3::Y),
+        }])
+        .unwrap();
+        let frame = |k: u64| [k as f32; 6];
+        // A recording: input frames 0 and 3 never arrived, nor 6 and 7 at the end.
+        let mut take = Take::new(&skeleton, 30.0, PathBuf::from("take.bvh"), Some(0)).unwrap();
+        for k in [1, 2, 4, 5] {
+            take.push(k, &frame(k)).unwrap();
+        }
+        take.hold_to_end(8).unwrap();
+        assert_eq!(firsts(&take), [1.0, 1.0, 2.0, 2.0, 4.0, 5.0, 5.0, 5.0]);
+        assert_eq!((take.frames(), take.held()), (8, 4));
+        // A live take starts at the first frame pushed; frames 12 and 13 were dropped.
+        let mut live = Take::new(&skeleton, 30.0, PathBuf::from("take.bvh"), None).unwrap();
+        for k in [10, 11, 14] {
+            live.push(k, &frame(k)).unwrap();
+        }
+        assert_eq!(firsts(&live), [10.0, 11.0, 11.0, 11.0, 14.0]);
+        assert_eq!(live.held(), 2);
+        // Nothing to hold before a first pose.
+        let mut empty = Take::new(&skeleton, 30.0, PathBuf::from("take.bvh"), Some(0)).unwrap();
+        empty.hold_to_end(5).unwrap();
+        assert_eq!(empty.frames(), 0);
     }
 }

@@ -34,6 +34,13 @@ pub enum ConvertError {
     /// The JPEG decoder rejected the data.
     #[error("JPEG decode failed: {reason}")]
     Jpeg { reason: String },
+    /// The JPEG data stops before its end-of-image marker: the file or the camera's buffer was cut
+    /// short. The decoder would fill the missing rows with grey and report nothing.
+    #[error("JPEG data is truncated: {len} bytes without the end-of-image marker")]
+    TruncatedJpeg { len: usize },
+    /// An image file (PNG, JPEG, GIF) that does not decode.
+    #[error("{reason}")]
+    Image { reason: String },
 }
 
 /// Quantisation range of YUV samples.
@@ -416,8 +423,42 @@ pub fn with_default_dht(data: &[u8]) -> Option<Vec<u8>> {
     }
 }
 
-/// One MJPEG frame (a JPEG image, possibly without Huffman tables) to RGB.
+/// Whether `data` starts like a JPEG stream (the start-of-image marker FF D8).
+pub fn is_jpeg(data: &[u8]) -> bool {
+    data.starts_with(&[0xFF, 0xD8])
+}
+
+/// Checks that JPEG data is whole: past any zero bytes a camera pads its buffer with, it ends with
+/// the end-of-image marker FF D9. Inside the compressed data an FF byte is always followed by 00 or
+/// a restart marker, so FF D9 there is the end. A JPEG cut short (a file copied in part, a USB
+/// camera that lost the end of a frame) decodes without an error, the missing rows grey; the
+/// segmenter would see a frame with nobody in it, and training a grey picture with a pose.
+pub fn check_jpeg_whole(data: &[u8]) -> Result<(), ConvertError> {
+    let end = data.iter().rposition(|&b| b != 0).map_or(0, |k| k + 1);
+    if data[..end].ends_with(&[0xFF, 0xD9]) {
+        Ok(())
+    } else {
+        Err(ConvertError::TruncatedJpeg { len: data.len() })
+    }
+}
+
+/// An encoded frame (PNG, JPEG or GIF, told from its first bytes) to RGB. A JPEG is checked to be
+/// whole first ([`check_jpeg_whole`]); a truncated PNG is an error of its decoder.
+pub fn decode_frame(data: &[u8]) -> Result<RgbImage, ConvertError> {
+    if is_jpeg(data) {
+        check_jpeg_whole(data)?;
+    }
+    image::load_from_memory(data)
+        .map(|img| img.into_rgb8())
+        .map_err(|e| ConvertError::Image {
+            reason: e.to_string(),
+        })
+}
+
+/// One MJPEG frame (a JPEG image, possibly without Huffman tables) to RGB; a frame cut short is an
+/// error ([`check_jpeg_whole`]).
 pub fn mjpeg_to_rgb(data: &[u8]) -> Result<RgbImage, ConvertError> {
+    check_jpeg_whole(data)?;
     let patched = with_default_dht(data);
     let bytes = patched.as_deref().unwrap_or(data);
     image::load_from_memory_with_format(bytes, ImageFormat::Jpeg)
@@ -662,13 +703,60 @@ mod tests {
 
     #[test]
     fn mjpeg_garbage_is_an_error() {
-        assert!(matches!(mjpeg_to_rgb(&[]), Err(ConvertError::Jpeg { .. })));
         assert!(matches!(
-            mjpeg_to_rgb(&[0xFF, 0xD8, 0xFF, 0xDA, 0, 2, 1, 2, 3]),
+            mjpeg_to_rgb(&[]),
+            Err(ConvertError::TruncatedJpeg { len: 0 })
+        ));
+        assert!(matches!(
+            mjpeg_to_rgb(&[0xFF, 0xD8, 0xFF, 0xDA, 0, 2, 1, 2, 3, 0xFF, 0xD9]),
             Err(ConvertError::Jpeg { .. })
         ));
-        let (_, bytes) = quadrant_jpeg();
-        // A truncated frame may decode (padded) or fail, but must not panic.
-        let _ = mjpeg_to_rgb(&bytes[..bytes.len() / 3]);
+    }
+
+    #[test]
+    fn a_truncated_jpeg_is_an_error_not_a_grey_frame() {
+        let img = RgbImage::from_fn(64, 64, |x, y| Rgb([(4 * x) as u8, (4 * y) as u8, 90]));
+        let mut bytes = Vec::new();
+        JpegEncoder::new_with_quality(&mut bytes, 95)
+            .encode_image(&img)
+            .expect("encodes");
+        // The decoder alone takes the first two thirds and fills the rest (what the check is for).
+        let two_thirds = 2 * bytes.len() / 3;
+        assert!(image::load_from_memory(&bytes[..two_thirds]).is_ok());
+        for cut in [two_thirds, bytes.len() - 1] {
+            let short = &bytes[..cut];
+            assert_eq!(
+                mjpeg_to_rgb(short),
+                Err(ConvertError::TruncatedJpeg { len: cut })
+            );
+            assert_eq!(
+                decode_frame(short),
+                Err(ConvertError::TruncatedJpeg { len: cut })
+            );
+        }
+        // A camera's buffer padded with zeros after the end-of-image marker is whole.
+        let mut padded = bytes.clone();
+        padded.extend_from_slice(&[0; 64]);
+        assert_eq!(check_jpeg_whole(&padded), Ok(()));
+        assert_eq!(mjpeg_to_rgb(&padded), mjpeg_to_rgb(&bytes));
+        assert_eq!(decode_frame(&bytes), mjpeg_to_rgb(&bytes));
+    }
+
+    #[test]
+    fn decode_frame_reads_png_and_reports_a_truncated_one() {
+        let mut img = RgbImage::new(3, 2);
+        img.put_pixel(2, 1, image::Rgb([10, 200, 30]));
+        let mut png = Vec::new();
+        img.write_to(&mut std::io::Cursor::new(&mut png), ImageFormat::Png)
+            .expect("encodes");
+        assert_eq!(decode_frame(&png), Ok(img));
+        assert!(matches!(
+            decode_frame(&png[..png.len() / 2]),
+            Err(ConvertError::Image { .. })
+        ));
+        assert!(matches!(
+            decode_frame(b"not an image"),
+            Err(ConvertError::Image { .. })
+        ));
     }
 }

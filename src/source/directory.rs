@@ -20,6 +20,7 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use super::convert::decode_frame;
 use super::{timestamp_at_fps, Frame, FrameSource, SourceError};
 
 /// Reads numbered image files from a directory, in natural order.
@@ -305,12 +306,12 @@ impl DirectorySource {
             path: path.clone(),
             source,
         })?;
-        let image = image::load_from_memory(&bytes).map_err(|e| SourceError::CorruptFrame {
+        let image = decode_frame(&bytes).map_err(|e| SourceError::CorruptFrame {
             source_name: path.display().to_string(),
             index: index as u64,
             reason: e.to_string(),
         })?;
-        let got = (image.width(), image.height());
+        let got = image.dimensions();
         if got != self.size {
             return Err(SourceError::SizeMismatch {
                 path: path.clone(),
@@ -319,7 +320,7 @@ impl DirectorySource {
                 got,
             });
         }
-        Ok(image.into_rgb8())
+        Ok(image)
     }
 }
 
@@ -503,7 +504,14 @@ mod tests {
         // Not an image at all.
         std::fs::write(dir.path().join("000002.jpg"), b"not a jpeg").unwrap();
         write_png(dir.path(), "000003.png", 5, 4, [1, 2, 3]);
-        write_png(dir.path(), "000004.png", 4, 4, [9, 9, 9]);
+        // A JPEG cut short, which the decoder alone would fill with grey.
+        let cut = dir.path().join("000004.jpg");
+        RgbImage::from_fn(4, 4, |x, y| Rgb([60 * x as u8, 60 * y as u8, 9]))
+            .save_with_format(&cut, ImageFormat::Jpeg)
+            .unwrap();
+        let full = std::fs::read(&cut).unwrap();
+        std::fs::write(&cut, &full[..full.len() - 20]).unwrap();
+        write_png(dir.path(), "000005.png", 4, 4, [9, 9, 9]);
 
         let mut src = DirectorySource::open(dir.path(), 30.0).unwrap();
         assert_eq!(src.next_frame().unwrap().unwrap().index, 0);
@@ -537,8 +545,18 @@ mod tests {
             }
             other => panic!("expected SizeMismatch, got {other:?}"),
         }
+        match src.next_frame() {
+            Err(e @ SourceError::CorruptFrame { index: 4, .. }) => {
+                let text = e.to_string();
+                assert!(
+                    text.contains("000004.jpg") && text.contains("truncated"),
+                    "{text}"
+                );
+            }
+            other => panic!("expected CorruptFrame, got {other:?}"),
+        }
         let last = src.next_frame().unwrap().unwrap();
-        assert_eq!((last.index, last.image.get_pixel(0, 0).0), (4, [9, 9, 9]));
+        assert_eq!((last.index, last.image.get_pixel(0, 0).0), (5, [9, 9, 9]));
         assert!(src.next_frame().unwrap().is_none());
     }
 

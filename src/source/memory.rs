@@ -5,6 +5,7 @@
 
 use std::time::Duration;
 
+use super::convert::decode_frame;
 use super::{Frame, FrameSource, SourceError};
 
 /// Replays `frames` cyclically for `length` frames at `fps`, optionally failing like an unplugged
@@ -49,9 +50,8 @@ impl MemorySource {
     ) -> Result<MemorySource, String> {
         let mut size = None;
         for (name, bytes) in &files {
-            let dims = image::load_from_memory(bytes)
+            let dims = decode_frame(bytes)
                 .map_err(|e| format!("{name}: {e}"))?
-                .to_rgb8()
                 .dimensions();
             if *size.get_or_insert(dims) != dims {
                 return Err(format!(
@@ -104,13 +104,13 @@ impl FrameSource for MemorySource {
         }
         let image = match &self.frames[(index % self.frames.len() as u64) as usize] {
             Stored::Decoded(image) => image.clone(),
-            Stored::Encoded(bytes) => image::load_from_memory(bytes)
-                .map_err(|e| SourceError::CorruptFrame {
+            Stored::Encoded(bytes) => {
+                decode_frame(bytes).map_err(|e| SourceError::CorruptFrame {
                     source_name: "memory".to_owned(),
                     index,
                     reason: e.to_string(),
                 })?
-                .to_rgb8(),
+            }
         };
         Ok(Some(Frame {
             index,

@@ -120,6 +120,9 @@ pub struct RunSummary {
     pub skipped: Vec<String>,
     /// Why the source stopped early (a camera unplugged, an unreadable file), if it did.
     pub source_error: Option<String>,
+    /// Input frames the source went through: one past the last index it delivered or named in
+    /// an error (delivered, dropped and skipped frames alike).
+    pub input_frames: u64,
     pub stopped_by_user: bool,
     pub seconds: f64,
 }
@@ -377,11 +380,13 @@ pub fn run(
                 controls.stop.store(true, Ordering::Relaxed);
             }
         }
-        let (skipped, error) = capture
-            .join()
-            .unwrap_or_else(|_| (Vec::new(), Some("the capture thread panicked".to_owned())));
-        summary.skipped = skipped;
-        summary.source_error = error;
+        let end = capture.join().unwrap_or_else(|_| CaptureEnd {
+            error: Some("the capture thread panicked".to_owned()),
+            ..CaptureEnd::default()
+        });
+        summary.skipped = end.skipped;
+        summary.source_error = end.error;
+        summary.input_frames = end.input_frames;
     });
     summary.dropped = captured.dropped();
     summary.stopped_by_user = controls.stopped();
@@ -389,25 +394,37 @@ pub fn run(
     summary
 }
 
-/// The capture thread: reads frames into `queue` until the end, a failure or a stop. Returns the
-/// skipped corrupt frames and the error that ended the stream, if any.
+/// How the capture thread ended.
+#[derive(Debug, Default)]
+struct CaptureEnd {
+    /// The skipped corrupt frames, each named.
+    skipped: Vec<String>,
+    /// The error that ended the stream, if any.
+    error: Option<String>,
+    /// [`RunSummary::input_frames`].
+    input_frames: u64,
+}
+
+/// The capture thread: reads frames into `queue` until the end, a failure or a stop.
 fn capture_frames(
     open_source: impl FnOnce() -> Result<Box<dyn FrameSource>, SourceError>,
     queue: &StageQueue<Captured>,
     controls: &Controls,
-) -> (Vec<String>, Option<String>) {
-    let mut skipped = Vec::new();
+) -> CaptureEnd {
+    let mut end = CaptureEnd::default();
     let mut source = match open_source() {
         Ok(source) => source,
         Err(e) => {
             queue.close();
-            return (skipped, Some(e.to_string()));
+            end.error = Some(e.to_string());
+            return end;
         }
     };
-    let mut error = None;
+    let mut seen = |index: u64| end.input_frames = end.input_frames.max(index + 1);
     while !controls.stopped() {
         match source.next_frame() {
             Ok(Some(frame)) => {
+                seen(frame.index);
                 let item = Captured {
                     index: frame.index,
                     timestamp_s: frame.timestamp.as_secs_f64(),
@@ -419,17 +436,21 @@ fn capture_frames(
                 }
             }
             Ok(None) => break,
-            Err(e @ (SourceError::CorruptFrame { .. } | SourceError::SizeMismatch { .. })) => {
-                skipped.push(e.to_string());
+            Err(
+                e @ (SourceError::CorruptFrame { index, .. }
+                | SourceError::SizeMismatch { index, .. }),
+            ) => {
+                seen(index);
+                end.skipped.push(e.to_string());
             }
             Err(e) => {
-                error = Some(e.to_string());
+                end.error = Some(e.to_string());
                 break;
             }
         }
     }
     queue.close();
-    (skipped, error)
+    end
 }
 
 fn timing_lines(t: &FrameTimes) -> Vec<String> {

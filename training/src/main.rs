@@ -22,6 +22,7 @@ use suitcap::segment::{
     train_segmenter, SearchStep, TrainingFrame, WeightSearch, MAX_VALIDATION_FRAMES,
     MIN_VALIDATION_FRAMES,
 };
+use suitcap::source::convert::decode_frame;
 use suitcap::stats::median;
 use suitcap::suit::SuitDefinition;
 
@@ -363,9 +364,9 @@ fn frame_and_mask(dataset: &Dataset, index: usize) -> anyhow::Result<(image::Rgb
 /// Reads frame `index` of a dataset, naming the file on error.
 fn read_frame(dataset: &Dataset, index: usize) -> anyhow::Result<image::RgbImage> {
     let path = dataset.frame_path(index);
-    Ok(image::open(&path)
-        .with_context(|| format!("cannot read frame {index}: {}", path.display()))?
-        .to_rgb8())
+    let context = || format!("cannot read frame {index}: {}", path.display());
+    let bytes = std::fs::read(&path).with_context(context)?;
+    decode_frame(&bytes).with_context(context)
 }
 
 /// Reads the ground-truth mask of frame `index` of a dataset, naming the file on error.
