@@ -1,6 +1,7 @@
 //! The try-on commands end to end on a small generated clip, through the real binary: what `run`
 //! writes, and that nothing recorded is lost when the input fails mid-take, a frame is corrupt,
-//! nobody is in view, or the process is told to stop. Also `drape`, `demo` and `suit pattern`.
+//! nobody is in view, or the process is told to stop, and that an OBJ garment that cannot be used
+//! stops `run` before its first frame. Also `drape`, `demo` and `suit pattern`.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -173,6 +174,29 @@ fn a_corrupt_frame_is_skipped_and_named_and_an_empty_scene_hides_the_garment() {
         empty.starts_with("9,0,") && empty.contains(",hidden,"),
         "{empty}"
     );
+}
+
+#[test]
+fn an_obj_garment_that_cannot_be_used_stops_the_run_before_the_first_frame() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let data = generated_clip(&tmp.path().join("clip"), 2);
+    let obj = tmp.path().join("shirt.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n").expect("obj");
+    let out = tmp.path().join("out");
+    let garment = obj.to_string_lossy().into_owned();
+    let output = run(
+        &data.join("frames"),
+        &data.join("camera.toml"),
+        &out,
+        &["--garment", &garment],
+    );
+    let message = text(&output);
+    assert!(!output.status.success(), "{message}");
+    assert!(
+        message.contains("shirt.obj, line 2") && message.contains("'nan'"),
+        "{message}"
+    );
+    assert!(!out.join("take.bvh").exists(), "{message}");
 }
 
 #[test]

@@ -193,11 +193,14 @@ pub fn load_garment_with_band(
     band_cm: f32,
 ) -> Result<GarmentMesh, ObjError> {
     let mesh = load_obj(path)?;
-    let name = path
-        .file_stem()
+    Ok(garment_from_mesh(obj_name(path), mesh, rig, band_cm))
+}
+
+/// An OBJ garment's name: its file's stem.
+pub fn obj_name(path: &Path) -> String {
+    path.file_stem()
         .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "obj".into());
-    Ok(garment_from_mesh(name, mesh, rig, band_cm))
+        .unwrap_or_else(|| "obj".into())
 }
 
 /// Anchors a mesh on `rig` (see [`load_garment_with_band`]).

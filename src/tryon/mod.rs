@@ -28,6 +28,9 @@ use crate::body_size::{BodySize, BodySizeEstimator, Silhouette};
 use crate::camera::Camera;
 use crate::cloth::garment::{GarmentError, GarmentKind, GarmentMesh, GarmentParams};
 use crate::cloth::material::Material;
+use crate::cloth::obj::{
+    garment_from_mesh, load_obj, obj_name, ObjError, ObjMesh, DEFAULT_ANCHOR_BAND_CM,
+};
 use crate::cloth::proxies::{BodyRig, DEFAULT_MARGIN_CM};
 use crate::cloth::solver::{Cloth, ClothError, FrameQuality, SolverSettings};
 use crate::cloth::Capsule;
@@ -146,8 +149,8 @@ pub enum TryOnError {
     Garment(#[from] GarmentError),
     #[error(transparent)]
     Body(#[from] crate::body::MissingJoint),
-    #[error("{path}: {message}")]
-    Obj { path: PathBuf, message: String },
+    #[error(transparent)]
+    Obj(#[from] ObjError),
 }
 
 /// What the garment is doing in a frame.
@@ -211,12 +214,20 @@ pub struct ClothStage {
     /// The pose and time of the last frame the cloth was advanced to.
     last: Option<(Vec<f32>, f64)>,
     missing: u32,
+    /// An OBJ garment's mesh, read once when the stage is made (so a file that cannot be used is
+    /// an error before the first frame, not after the body was measured) and anchored anew for
+    /// each body.
+    obj: Option<(PathBuf, ObjMesh)>,
 }
 
 impl ClothStage {
     /// A cloth stage for poses on `template` (the regressor's skeleton, or a mocap clip's).
     pub fn new(template: &Skeleton, options: ClothOptions) -> Result<ClothStage, TryOnError> {
         let template_body = crate::body_size::template_body(template)?;
+        let obj = match &options.garment {
+            GarmentChoice::Obj(path) => Some((path.clone(), load_obj(path)?)),
+            GarmentChoice::Procedural(_) => None,
+        };
         Ok(ClothStage {
             size: options.known_size,
             options,
@@ -226,6 +237,7 @@ impl ClothStage {
             simulation: None,
             last: None,
             missing: 0,
+            obj,
         })
     }
 
@@ -331,10 +343,11 @@ impl ClothStage {
                 GarmentMesh::generate(*kind, &rig, &self.options.garment_params())?
             }
             GarmentChoice::Obj(path) => {
-                crate::cloth::obj::load_garment(path, &rig).map_err(|e| TryOnError::Obj {
-                    path: path.clone(),
-                    message: e.to_string(),
-                })?
+                let mesh = match &self.obj {
+                    Some((read, mesh)) if read == path => mesh.clone(),
+                    _ => load_obj(path)?,
+                };
+                garment_from_mesh(obj_name(path), mesh, &rig, DEFAULT_ANCHOR_BAND_CM)
             }
         };
         let mut cloth = Cloth::new(
