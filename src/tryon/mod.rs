@@ -500,3 +500,110 @@ impl RenderStage {
         Ok((render_ms, started.elapsed().as_secs_f64() * 1e3))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Intrinsics;
+    use std::path::Path;
+
+    fn walk() -> crate::bvh::Motion {
+        let clip =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        crate::bvh::Motion::load(&clip).expect("clip")
+    }
+
+    /// A coarse live skirt (4 cm edges, quick to dress) on the walk's own skeleton.
+    fn stage(motion: &crate::bvh::Motion, known_size: Option<BodySize>) -> ClothStage {
+        let mut options = ClothOptions::new(
+            GarmentChoice::Procedural(GarmentKind::Skirt),
+            SimulationMode::Live,
+        );
+        options.edge_cm = Some(4.0);
+        options.sizing_frames = 3;
+        options.known_size = known_size;
+        ClothStage::new(&motion.skeleton, options).expect("stage")
+    }
+
+    /// Advances `stage` to the walk's frame `k` (30 frames/s), with or without a person seen; the
+    /// silhouette is empty (the sizing sees nothing in it).
+    fn step(
+        stage: &mut ClothStage,
+        motion: &crate::bvh::Motion,
+        k: usize,
+        person: bool,
+    ) -> ClothFrame {
+        let camera = Camera::look_at(
+            Intrinsics::from_fov(64, 48, 60.0),
+            Vec3::new(0.0, 100.0, 400.0),
+            Vec3::ZERO,
+            Vec3::Y,
+        );
+        let empty = Mask::empty(64, 48);
+        stage
+            .advance(
+                motion.frame(k),
+                k as f64 / 30.0,
+                person,
+                Silhouette::whole(&empty),
+                &camera,
+            )
+            .expect("advances")
+    }
+
+    #[test]
+    fn nothing_is_worn_until_the_person_was_measured() {
+        let motion = walk();
+        let mut stage = stage(&motion, None);
+        for k in 0..4 {
+            let frame = step(&mut stage, &motion, k, true);
+            // An empty silhouette measures nothing, so the count stays at 0 of 3.
+            assert_eq!(frame.status, ClothStatus::Sizing { seen: 0, needed: 3 });
+            assert!(frame.positions.is_empty() && !frame.redressed);
+        }
+        assert_eq!(stage.size(), None);
+        let frame = step(&mut stage, &motion, 4, false);
+        assert_eq!(frame.status, ClothStatus::NoPerson);
+    }
+
+    #[test]
+    fn the_garment_stays_on_through_a_short_loss_and_is_put_on_again_after_a_long_one() {
+        let motion = walk();
+        let mut stage = stage(&motion, Some(BodySize::TEMPLATE));
+        let first = step(&mut stage, &motion, 0, true);
+        assert_eq!(
+            first.status,
+            ClothStatus::Worn {
+                size: BodySize::TEMPLATE
+            }
+        );
+        assert!(first.redressed && !first.positions.is_empty());
+        let second = step(&mut stage, &motion, 1, true);
+        assert!(!second.redressed);
+        assert_eq!(second.positions.len(), first.positions.len());
+        // Lost for one frame fewer than the limit: hidden, then worn on without dressing again.
+        let mut k = 2;
+        for _ in 1..LOST_AFTER_FRAMES {
+            let hidden = step(&mut stage, &motion, k, false);
+            assert_eq!(hidden.status, ClothStatus::NoPerson);
+            assert!(hidden.positions.is_empty());
+            k += 1;
+        }
+        let back = step(&mut stage, &motion, k, true);
+        assert!(matches!(back.status, ClothStatus::Worn { .. }) && !back.redressed);
+        // Lost for the limit: taken off, and dressed again when the person is back.
+        for _ in 0..LOST_AFTER_FRAMES {
+            k += 1;
+            step(&mut stage, &motion, k, false);
+        }
+        k += 1;
+        assert!(step(&mut stage, &motion, k, true).redressed);
+        k += 1;
+        assert!(!step(&mut stage, &motion, k, true).redressed);
+        // Another garment is put on at the next frame.
+        stage.set_garment(GarmentChoice::Procedural(GarmentKind::TShirt));
+        k += 1;
+        let shirt = step(&mut stage, &motion, k, true);
+        assert!(shirt.redressed && shirt.positions.len() != first.positions.len());
+    }
+}
