@@ -113,11 +113,17 @@ fn eval_writes_the_per_joint_table_and_its_bar_chart() {
             .output()
             .expect("runs (the test command builds the workspace first)"),
     );
-    assert!(table.contains("(12 frames, masks: segmenter)"), "{table}");
-    // A header, a row per joint of the printed table, and the mean.
+    assert!(table.contains("(12 frames, masks: segmenter;"), "{table}");
+    // A header, a row per joint of the printed table, and the mean; the root has no position
+    // error (it is aligned), every other joint one in centimetres.
     let rows = std::fs::read_to_string(&csv).expect("the CSV");
     let lines: Vec<&str> = rows.lines().collect();
-    assert_eq!(lines[0], "joint,euler_deg,geodesic_deg");
+    assert_eq!(lines[0], "joint,euler_deg,geodesic_deg,position_cm");
+    assert!(lines[1].ends_with(','), "{rows}");
+    for row in &lines[2..] {
+        let cm: f64 = row.rsplit(',').next().unwrap_or_default().parse().expect("cm");
+        assert!((0.0..100.0).contains(&cm), "{row}");
+    }
     assert!(
         lines.last().is_some_and(|l| l.starts_with("mean,")),
         "{rows}"

@@ -1,10 +1,14 @@
 //! Pose error measures: per joint, the mean absolute difference of its three Euler angles wrapped to
 //! ±180° (the source paper's measure) and the geodesic angle between the two rotations (which does not
-//! depend on how a rotation is split into Euler angles); and how well training motions cover a test
-//! motion ([`nearest_pose_errors`]): the error that picking the closest training pose every time,
-//! knowing the truth, would still make.
+//! depend on how a rotation is split into Euler angles); where the joints are, in centimetres, with
+//! the root aligned ([`PositionErrors`], the MPJPE of the pose-estimation literature); and how well
+//! training motions cover a test motion ([`nearest_pose_errors`]): the error that picking the
+//! closest training pose every time, knowing the truth, would still make.
+
+use glam::{Affine3A, Vec3};
 
 use super::{compose, PoseLayout};
+use crate::skeleton::Skeleton;
 
 /// `a − b` wrapped to [−180°, 180°).
 pub fn wrap_degrees(d: f32) -> f32 {
@@ -76,22 +80,116 @@ impl JointErrors {
             / self.names.len().max(1) as f64
     }
 
-    /// `joint,euler_deg,geodesic_deg` rows, then `mean`.
-    pub fn to_csv(&self) -> String {
-        let mut out = String::from("joint,euler_deg,geodesic_deg\n");
+    /// `joint,euler_deg,geodesic_deg,position_cm` rows, then `mean`; the position column (from
+    /// `positions`, over the same frames) is empty for the root and without positions.
+    pub fn to_csv(&self, positions: Option<&PositionErrors>) -> String {
+        let cm = |j: Option<usize>| match (positions, j) {
+            (Some(p), Some(j)) => format!("{:.3}", p.cm(j)),
+            (Some(p), None) => format!("{:.3}", p.mean_cm()),
+            (None, _) => String::new(),
+        };
+        let mut out = String::from("joint,euler_deg,geodesic_deg,position_cm\n");
         for (j, name) in self.names.iter().enumerate() {
+            let position = j.checked_sub(1).map_or(String::new(), |k| cm(Some(k)));
             out.push_str(&format!(
-                "{name},{:.3},{:.3}\n",
+                "{name},{:.3},{:.3},{position}\n",
                 self.euler(j),
                 self.geodesic(j)
             ));
         }
         out.push_str(&format!(
-            "mean,{:.3},{:.3}\n",
+            "mean,{:.3},{:.3},{}\n",
             self.mean_euler(),
-            self.mean_geodesic()
+            self.mean_geodesic(),
+            cm(None)
         ));
         out
+    }
+}
+
+/// Accumulated position errors per estimated joint after the root: the distance (cm) between
+/// where forward kinematics puts the joint (its BVH joint's origin: the elbow for a forearm, the
+/// knee for a shin) from the true frame and from the estimated one, both on the truth's skeleton
+/// and with the root's position channels zeroed. Bone lengths and the root's place are thus the
+/// same for both, so this is the joint angles' error in centimetres (the root-aligned mean per
+/// joint position error, MPJPE). A bone's twist about its own axis moves none of its joints:
+/// it counts in the angle measures and not here, until a bent child shows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PositionErrors {
+    /// The suit's joints after the root.
+    pub names: Vec<String>,
+    cm: Vec<f64>,
+    pub frames: usize,
+    /// Scratch: the two frames with the root at the origin, and their world transforms.
+    frames_scratch: [Vec<f32>; 2],
+    world: [Vec<Affine3A>; 2],
+}
+
+impl PositionErrors {
+    /// For the suit's joints `names` (the root first, which is left out).
+    pub fn new(names: &[String]) -> PositionErrors {
+        let names = names.get(1..).unwrap_or_default().to_vec();
+        PositionErrors {
+            cm: vec![0.0; names.len()],
+            names,
+            frames: 0,
+            frames_scratch: Default::default(),
+            world: Default::default(),
+        }
+    }
+
+    /// Adds one frame: the ground truth and the estimate, both full BVH frames of `skeleton`, whose
+    /// joints `layout` names.
+    pub fn add(
+        &mut self,
+        skeleton: &Skeleton,
+        layout: &PoseLayout,
+        truth: &[f32],
+        estimate: &[f32],
+    ) {
+        for ((scratch, world), frame) in self
+            .frames_scratch
+            .iter_mut()
+            .zip(&mut self.world)
+            .zip([truth, estimate])
+        {
+            scratch.clear();
+            scratch.extend_from_slice(frame);
+            for &c in &layout.root_position {
+                if let Some(v) = scratch.get_mut(c) {
+                    *v = 0.0;
+                }
+            }
+            skeleton.forward_kinematics(scratch, world);
+        }
+        let at = |world: &[Affine3A], joint: usize| {
+            world
+                .get(joint)
+                .map_or(Vec3::ZERO, |t| Vec3::from(t.translation))
+        };
+        for (sum, &(joint, _)) in self.cm.iter_mut().zip(layout.joints.iter().skip(1)) {
+            *sum += at(&self.world[0], joint).distance(at(&self.world[1], joint)) as f64;
+        }
+        self.frames += 1;
+    }
+
+    pub fn merge(&mut self, other: &PositionErrors) {
+        for (a, b) in self.cm.iter_mut().zip(&other.cm) {
+            *a += b;
+        }
+        self.frames += other.frames;
+    }
+
+    /// Mean position error of the `j`-th joint after the root, cm.
+    pub fn cm(&self, j: usize) -> f64 {
+        self.cm
+            .get(j)
+            .map_or(0.0, |s| s / self.frames.max(1) as f64)
+    }
+
+    /// Mean over the joints after the root, cm.
+    pub fn mean_cm(&self) -> f64 {
+        (0..self.names.len()).map(|j| self.cm(j)).sum::<f64>() / self.names.len().max(1) as f64
     }
 }
 
@@ -189,6 +287,46 @@ mod tests {
         assert!((e.euler(1) - 20.0 / 3.0).abs() < 1e-4);
         assert!((e.geodesic(1) - 20.0).abs() < 1e-2);
         assert!((e.mean_euler() - 10.0 / 3.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn a_known_position_error_on_a_two_joint_skeleton() {
+        let skeleton = crate::skeleton::tests::two_joint_arm();
+        let layout = two_joint_layout();
+        let names = ["shoulder".to_string(), "elbow".to_string()];
+        let mut e = PositionErrors::new(&names);
+        assert_eq!(e.names, ["elbow"]);
+        // The root 7 cm off and the elbow's own angle 90° off move nothing the measure sees: the
+        // root is aligned and the elbow joint stays where the shoulder puts it.
+        let truth = [0.0; 9];
+        let mut estimate = [0.0; 9];
+        estimate[0] = 7.0;
+        estimate[6] = 90.0;
+        e.add(&skeleton, &layout, &truth, &estimate);
+        assert_eq!(e.cm(0), 0.0);
+        // The shoulder turned 90° about Z swings the elbow, 10 cm out along X, onto +Y: √2 · 10 cm.
+        let mut turned = [0.0; 9];
+        turned[3] = 90.0;
+        e.add(&skeleton, &layout, &truth, &turned);
+        assert!(
+            (e.cm(0) - 10.0 * 2f64.sqrt() / 2.0).abs() < 1e-4,
+            "{}",
+            e.cm(0)
+        );
+        assert!((e.mean_cm() - e.cm(0)).abs() < 1e-12);
+        let mut both = PositionErrors::new(&names);
+        both.merge(&e);
+        assert_eq!((both.frames, both.cm(0)), (2, e.cm(0)));
+        let mut angles = JointErrors::new(names.to_vec());
+        angles.add(&layout, &truth, &estimate);
+        angles.add(&layout, &truth, &turned);
+        assert_eq!(
+            angles.to_csv(Some(&e)),
+            "joint,euler_deg,geodesic_deg,position_cm\n\
+             shoulder,15.000,45.000,\n\
+             elbow,15.000,45.000,7.071\n\
+             mean,15.000,45.000,7.071\n"
+        );
     }
 
     #[test]

@@ -17,6 +17,7 @@ use suitcap::dataset::Dataset;
 use suitcap::manifest::{DatasetRecord, Manifest, MANIFEST_FILE, MANIFEST_FORMAT};
 use suitcap::mask::Mask;
 use suitcap::pose::chart::{BarChart, Series};
+use suitcap::pose::eval::{JointErrors, PositionErrors};
 use suitcap::pose::{PoseLayout, RotationEncoding};
 use suitcap::segment::{
     train_segmenter, SearchStep, TrainingFrame, WeightSearch, MAX_VALIDATION_FRAMES,
@@ -1179,8 +1180,26 @@ fn coverage(suit_dir: &Path, train: &[PathBuf], data: &[PathBuf]) -> anyhow::Res
     Ok(())
 }
 
-/// Per-dataset results of an evaluation: (dataset, mean Euler error, mean geodesic error, frames).
-type DatasetErrors = Vec<(String, f64, f64, usize)>;
+/// One dataset's figures in an evaluation.
+#[derive(Clone, Debug, PartialEq)]
+struct DatasetErrors {
+    name: String,
+    /// Mean over the joints, Euler and geodesic, degrees.
+    euler_deg: f64,
+    geodesic_deg: f64,
+    /// Mean joint position error with the root aligned, cm ([`PositionErrors`]).
+    position_cm: f64,
+    frames: usize,
+}
+
+/// What [`evaluate`] measured: the raw regression's angle and position errors over every
+/// dataset, per dataset, and per frame.
+struct Evaluation {
+    angles: JointErrors,
+    positions: PositionErrors,
+    datasets: Vec<DatasetErrors>,
+    frames: Vec<FrameError>,
+}
 
 /// One evaluated frame: its mean joint-angle errors and the root's error, `None` where nobody
 /// was found (or, for the pixels, the root projects behind the camera).
@@ -1191,6 +1210,8 @@ struct FrameError {
     frame: usize,
     /// Mean over the joints, Euler and geodesic, degrees.
     angles_deg: Option<(f64, f64)>,
+    /// Mean joint position error with the root aligned, cm.
+    position_cm: Option<f64>,
     /// The root after the correction and registration: world distance (cm), image distance (px);
     /// and the image distance of the regressor's root alone.
     root_cm: Option<f64>,
@@ -1233,17 +1254,18 @@ fn dataset_record(dir: &Path) -> anyhow::Result<DatasetRecord> {
 /// `--frames-csv`: one row per frame, empty fields where there is no figure.
 fn frames_csv(datasets: &[String], frames: &[FrameError]) -> String {
     let mut text = String::from(
-        "dataset,frame,person,euler_deg,geodesic_deg,root_cm,root_px,root_px_regressed\n",
+        "dataset,frame,person,euler_deg,geodesic_deg,position_cm,root_cm,root_px,root_px_regressed\n",
     );
     let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.3}"));
     for f in frames {
         let dataset = datasets.get(f.dataset).map_or("", String::as_str);
         text.push_str(&format!(
-            "{dataset},{},{},{},{},{},{},{}\n",
+            "{dataset},{},{},{},{},{},{},{},{}\n",
             f.frame,
             u8::from(f.angles_deg.is_some()),
             opt(f.angles_deg.map(|a| a.0)),
             opt(f.angles_deg.map(|a| a.1)),
+            opt(f.position_cm),
             opt(f.root_cm),
             opt(f.root_px),
             opt(f.root_px_regressed)
@@ -1266,13 +1288,8 @@ fn evaluate(
     data: &[PathBuf],
     truth_masks: bool,
     verbose: bool,
-) -> anyhow::Result<(
-    suitcap::pose::eval::JointErrors,
-    DatasetErrors,
-    Vec<FrameError>,
-)> {
+) -> anyhow::Result<Evaluation> {
     use suitcap::pipeline::PosePipeline;
-    use suitcap::pose::eval::JointErrors;
     let mut pipeline = PosePipeline::load(suit_dir)?;
     let names: Vec<String> = pipeline
         .suit
@@ -1282,6 +1299,7 @@ fn evaluate(
         .map(|j| j.name.clone())
         .collect();
     let mut all = JointErrors::new(names.clone());
+    let mut all_positions = PositionErrors::new(&names);
     let mut per_dataset = Vec::new();
     // The runtime's pose filter, switched on piece by piece: (label, smoothing, limits, errors).
     use suitcap::pose::smoothing::{JointLimits, PoseFilter, SmoothingParams, JOINT_LIMITS_FILE};
@@ -1315,6 +1333,7 @@ fn evaluate(
             suitcap::pose::PoseLayout::new(&pipeline.suit.skeleton, &dataset.motion.skeleton)?;
         pipeline.reset();
         let mut errors = JointErrors::new(names.clone());
+        let mut positions = PositionErrors::new(&names);
         let mut missed = 0;
         let mut depth_ratios = Vec::new();
         let skeleton = pipeline.regressor.skeleton.skeleton.clone();
@@ -1348,6 +1367,7 @@ fn evaluate(
                 dataset: dataset_index,
                 frame: index,
                 angles_deg: None,
+                position_cm: None,
                 root_cm: None,
                 root_px: None,
                 root_px_regressed: None,
@@ -1362,6 +1382,15 @@ fn evaluate(
             this_frame.add(&layout, dataset.motion.frame(index), &result.frame);
             errors.merge(&this_frame);
             record.angles_deg = Some((this_frame.mean_euler(), this_frame.mean_geodesic()));
+            let mut this_positions = PositionErrors::new(&names);
+            this_positions.add(
+                &dataset.motion.skeleton,
+                &layout,
+                dataset.motion.frame(index),
+                &result.frame,
+            );
+            positions.merge(&this_positions);
+            record.position_cm = Some(this_positions.mean_cm());
             for (filter, variant) in filters.iter_mut().zip(variants.iter_mut()) {
                 let mut filtered = result.frame.clone();
                 filter.apply(index as f64 * frame_time, &mut filtered);
@@ -1401,25 +1430,28 @@ fn evaluate(
                 format!("; worst frame {k} ({e:.2}°)")
             });
             println!(
-                "{}: {} frames ({} with nobody found), clip {}, subject {}: mean joint angle error {:.2}° (Euler), {:.2}° (geodesic){worst}",
+                "{}: {} frames ({} with nobody found), clip {}, subject {}: mean joint angle error {:.2}° (Euler), {:.2}° (geodesic); joints {:.1} cm from the truth with the root aligned{worst}",
                 dir.display(),
                 dataset.frame_count(),
                 missed,
                 dataset.manifest.clip.name,
                 dataset.manifest.performer(),
                 errors.mean_euler(),
-                errors.mean_geodesic()
+                errors.mean_geodesic(),
+                positions.mean_cm()
             );
         }
         depth_ratios_all.extend_from_slice(&depth_ratios);
         depth_ratio_medians.push(median(&depth_ratios));
         all.merge(&errors);
-        per_dataset.push((
-            dir.display().to_string(),
-            errors.mean_euler(),
-            errors.mean_geodesic(),
-            errors.frames,
-        ));
+        all_positions.merge(&positions);
+        per_dataset.push(DatasetErrors {
+            name: dir.display().to_string(),
+            euler_deg: errors.mean_euler(),
+            geodesic_deg: errors.mean_geodesic(),
+            position_cm: positions.mean_cm(),
+            frames: errors.frames,
+        });
     }
     if verbose {
         println!(
@@ -1463,7 +1495,12 @@ fn evaluate(
             );
         }
     }
-    Ok((all, per_dataset, per_frame))
+    Ok(Evaluation {
+        angles: all,
+        positions: all_positions,
+        datasets: per_dataset,
+        frames: per_frame,
+    })
 }
 
 fn eval(
@@ -1475,22 +1512,39 @@ fn eval(
     frames: Option<&PathBuf>,
     chart: Option<&PathBuf>,
 ) -> anyhow::Result<()> {
-    let (all, per_dataset, per_frame) = evaluate(suit_dir, data, truth_masks, true)?;
+    let Evaluation {
+        angles: all,
+        positions,
+        datasets: per_dataset,
+        frames: per_frame,
+    } = evaluate(suit_dir, data, truth_masks, true)?;
     if let Some(path) = frames {
-        let names: Vec<String> = per_dataset.iter().map(|d| d.0.clone()).collect();
+        let names: Vec<String> = per_dataset.iter().map(|d| d.name.clone()).collect();
         suitcap::io::write_atomic(path, frames_csv(&names, &per_frame).as_bytes())
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     let names = all.names.clone();
-    println!("{:<18} {:>9} {:>9}", "joint", "Euler °", "geodesic °");
+    println!(
+        "{:<18} {:>9} {:>9} {:>11}",
+        "joint", "Euler °", "geodesic °", "position cm"
+    );
     for (j, name) in names.iter().enumerate() {
-        println!("{name:<18} {:>9.2} {:>9.2}", all.euler(j), all.geodesic(j));
+        // The root is aligned: its position error is zero by construction.
+        let position = j
+            .checked_sub(1)
+            .map_or("-".to_owned(), |k| format!("{:.2}", positions.cm(k)));
+        println!(
+            "{name:<18} {:>9.2} {:>9.2} {position:>11}",
+            all.euler(j),
+            all.geodesic(j)
+        );
     }
     println!(
-        "{:<18} {:>9.2} {:>9.2}   ({} frames, masks: {})",
+        "{:<18} {:>9.2} {:>9.2} {:>11.2}   ({} frames, masks: {}; position: where forward kinematics of the angles puts each joint, on the true skeleton with the root aligned)",
         "mean",
         all.mean_euler(),
         all.mean_geodesic(),
+        positions.mean_cm(),
         all.frames,
         if truth_masks {
             "ground truth"
@@ -1499,7 +1553,7 @@ fn eval(
         }
     );
     if let Some(path) = csv {
-        suitcap::io::write_atomic(path, all.to_csv().as_bytes())
+        suitcap::io::write_atomic(path, all.to_csv(Some(&positions)).as_bytes())
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     if let Some(path) = chart {
@@ -1537,24 +1591,33 @@ fn eval(
     if let Some(path) = json {
         let datasets: Vec<String> = per_dataset
             .iter()
-            .map(|(d, e, g, f)| format!("{{\"dataset\": \"{d}\", \"frames\": {f}, \"euler_deg\": {e:.4}, \"geodesic_deg\": {g:.4}}}"))
+            .map(|d| {
+                format!(
+                    "{{\"dataset\": \"{}\", \"frames\": {}, \"euler_deg\": {:.4}, \"geodesic_deg\": {:.4}, \"position_cm\": {:.4}}}",
+                    d.name, d.frames, d.euler_deg, d.geodesic_deg, d.position_cm
+                )
+            })
             .collect();
         let joints: Vec<String> = names
             .iter()
             .enumerate()
             .map(|(j, n)| {
+                let position = j
+                    .checked_sub(1)
+                    .map_or("null".to_owned(), |k| format!("{:.4}", positions.cm(k)));
                 format!(
-                    "{{\"joint\": \"{n}\", \"euler_deg\": {:.4}, \"geodesic_deg\": {:.4}}}",
+                    "{{\"joint\": \"{n}\", \"euler_deg\": {:.4}, \"geodesic_deg\": {:.4}, \"position_cm\": {position}}}",
                     all.euler(j),
                     all.geodesic(j)
                 )
             })
             .collect();
         let text = format!(
-            "{{\"masks\": \"{}\", \"mean_euler_deg\": {:.4}, \"mean_geodesic_deg\": {:.4}, \"frames\": {},\n \"datasets\": [{}],\n \"joints\": [{}]}}\n",
+            "{{\"masks\": \"{}\", \"mean_euler_deg\": {:.4}, \"mean_geodesic_deg\": {:.4}, \"mean_position_cm\": {:.4}, \"frames\": {},\n \"datasets\": [{}],\n \"joints\": [{}]}}\n",
             if truth_masks { "ground truth" } else { "segmenter" },
             all.mean_euler(),
             all.mean_geodesic(),
+            positions.mean_cm(),
             all.frames,
             datasets.join(", "),
             joints.join(", ")
@@ -1638,7 +1701,7 @@ fn experiments(
                 layout: layout.clone(),
             }
             .save(&variant)?;
-            let (errors, _, _) = evaluate(&variant, data, false, false)?;
+            let errors = evaluate(&variant, data, false, false)?.angles;
             println!(
                 "  S = {basis}: {} relevance vectors ({:.1} s), mean joint angle error {:.2}° (Euler), {:.2}° (geodesic)",
                 report.relevance_vectors,
@@ -1873,6 +1936,7 @@ mod tests {
                 dataset: 0,
                 frame: 0,
                 angles_deg: Some((4.25, 9.5)),
+                position_cm: Some(3.25),
                 root_cm: Some(12.0),
                 root_px: Some(3.5),
                 root_px_regressed: Some(5.0),
@@ -1881,6 +1945,7 @@ mod tests {
                 dataset: 0,
                 frame: 1,
                 angles_deg: None,
+                position_cm: None,
                 root_cm: None,
                 root_px: None,
                 root_px_regressed: None,
@@ -1889,6 +1954,7 @@ mod tests {
                 dataset: 1,
                 frame: 0,
                 angles_deg: Some((7.0, 11.0)),
+                position_cm: Some(6.5),
                 root_cm: Some(2.0),
                 root_px: None,
                 root_px_regressed: None,
@@ -1897,10 +1963,10 @@ mod tests {
         let text = frames_csv(&["a".into(), "b".into()], &frames);
         assert_eq!(
             text,
-            "dataset,frame,person,euler_deg,geodesic_deg,root_cm,root_px,root_px_regressed\n\
-             a,0,1,4.250,9.500,12.000,3.500,5.000\n\
-             a,1,0,,,,,\n\
-             b,0,1,7.000,11.000,2.000,,\n"
+            "dataset,frame,person,euler_deg,geodesic_deg,position_cm,root_cm,root_px,root_px_regressed\n\
+             a,0,1,4.250,9.500,3.250,12.000,3.500,5.000\n\
+             a,1,0,,,,,,\n\
+             b,0,1,7.000,11.000,6.500,2.000,,\n"
         );
         // The worst frame of the first dataset, the missed frame left out.
         assert_eq!(worst_frame(&frames[..2]), Some((0, 4.25)));
