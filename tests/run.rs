@@ -121,7 +121,12 @@ fn eval_writes_the_per_joint_table_and_its_bar_chart() {
     assert_eq!(lines[0], "joint,euler_deg,geodesic_deg,position_cm");
     assert!(lines[1].ends_with(','), "{rows}");
     for row in &lines[2..] {
-        let cm: f64 = row.rsplit(',').next().unwrap_or_default().parse().expect("cm");
+        let cm: f64 = row
+            .rsplit(',')
+            .next()
+            .unwrap_or_default()
+            .parse()
+            .expect("cm");
         assert!((0.0..100.0).contains(&cm), "{row}");
     }
     assert!(

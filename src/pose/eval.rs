@@ -83,14 +83,10 @@ impl JointErrors {
     /// `joint,euler_deg,geodesic_deg,position_cm` rows, then `mean`; the position column (from
     /// `positions`, over the same frames) is empty for the root and without positions.
     pub fn to_csv(&self, positions: Option<&PositionErrors>) -> String {
-        let cm = |j: Option<usize>| match (positions, j) {
-            (Some(p), Some(j)) => format!("{:.3}", p.cm(j)),
-            (Some(p), None) => format!("{:.3}", p.mean_cm()),
-            (None, _) => String::new(),
-        };
+        let cm = |value: Option<f64>| value.map_or(String::new(), |v| format!("{v:.3}"));
         let mut out = String::from("joint,euler_deg,geodesic_deg,position_cm\n");
         for (j, name) in self.names.iter().enumerate() {
-            let position = j.checked_sub(1).map_or(String::new(), |k| cm(Some(k)));
+            let position = cm(positions.and_then(|p| p.of_suit_joint(j)));
             out.push_str(&format!(
                 "{name},{:.3},{:.3},{position}\n",
                 self.euler(j),
@@ -101,7 +97,7 @@ impl JointErrors {
             "mean,{:.3},{:.3},{}\n",
             self.mean_euler(),
             self.mean_geodesic(),
-            cm(None)
+            cm(positions.map(PositionErrors::mean_cm))
         ));
         out
     }
@@ -185,6 +181,12 @@ impl PositionErrors {
         self.cm
             .get(j)
             .map_or(0.0, |s| s / self.frames.max(1) as f64)
+    }
+
+    /// Mean position error of the suit's joint `j` (as [`JointErrors`] counts them), cm; `None`
+    /// for the root, which is aligned.
+    pub fn of_suit_joint(&self, j: usize) -> Option<f64> {
+        j.checked_sub(1).map(|k| self.cm(k))
     }
 
     /// Mean over the joints after the root, cm.

@@ -1530,9 +1530,9 @@ fn eval(
     );
     for (j, name) in names.iter().enumerate() {
         // The root is aligned: its position error is zero by construction.
-        let position = j
-            .checked_sub(1)
-            .map_or("-".to_owned(), |k| format!("{:.2}", positions.cm(k)));
+        let position = positions
+            .of_suit_joint(j)
+            .map_or("-".to_owned(), |cm| format!("{cm:.2}"));
         println!(
             "{name:<18} {:>9.2} {:>9.2} {position:>11}",
             all.euler(j),
@@ -1602,9 +1602,9 @@ fn eval(
             .iter()
             .enumerate()
             .map(|(j, n)| {
-                let position = j
-                    .checked_sub(1)
-                    .map_or("null".to_owned(), |k| format!("{:.4}", positions.cm(k)));
+                let position = positions
+                    .of_suit_joint(j)
+                    .map_or("null".to_owned(), |cm| format!("{cm:.4}"));
                 format!(
                     "{{\"joint\": \"{n}\", \"euler_deg\": {:.4}, \"geodesic_deg\": {:.4}, \"position_cm\": {position}}}",
                     all.euler(j),
