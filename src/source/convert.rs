@@ -428,14 +428,18 @@ pub fn is_jpeg(data: &[u8]) -> bool {
     data.starts_with(&[0xFF, 0xD8])
 }
 
-/// Checks that JPEG data is whole: past any zero bytes a camera pads its buffer with, it ends with
-/// the end-of-image marker FF D9. Inside the compressed data an FF byte is always followed by 00 or
-/// a restart marker, so FF D9 there is the end. A JPEG cut short (a file copied in part, a USB
-/// camera that lost the end of a frame) decodes without an error, the missing rows grey; the
-/// segmenter would see a frame with nobody in it, and training a grey picture with a pose.
+/// Checks that JPEG data is whole: the end-of-image marker FF D9 follows its first scan. Inside
+/// the compressed data an FF byte is always followed by 00 or a restart marker, so FF D9 there is
+/// the end; what comes after it (a camera's zero padding, a phone's trailer) does not matter, and
+/// an EXIF thumbnail's own FF D9 lies before the first scan. A JPEG cut short (a file copied in
+/// part, a USB camera that lost the end of a frame) decodes without an error, the missing rows
+/// grey: the segmenter would see a frame with nobody in it, and training a grey picture with a
+/// pose. Data whose headers do not reach a scan is left to the decoder, which rejects it.
 pub fn check_jpeg_whole(data: &[u8]) -> Result<(), ConvertError> {
-    let end = data.iter().rposition(|&b| b != 0).map_or(0, |k| k + 1);
-    if data[..end].ends_with(&[0xFF, 0xD9]) {
+    let Some(sos) = scan_jpeg_headers(data).sos_offset else {
+        return Ok(());
+    };
+    if data[sos..].windows(2).rev().any(|w| w == [0xFF, 0xD9]) {
         Ok(())
     } else {
         Err(ConvertError::TruncatedJpeg { len: data.len() })
@@ -703,10 +707,7 @@ mod tests {
 
     #[test]
     fn mjpeg_garbage_is_an_error() {
-        assert!(matches!(
-            mjpeg_to_rgb(&[]),
-            Err(ConvertError::TruncatedJpeg { len: 0 })
-        ));
+        assert!(matches!(mjpeg_to_rgb(&[]), Err(ConvertError::Jpeg { .. })));
         assert!(matches!(
             mjpeg_to_rgb(&[0xFF, 0xD8, 0xFF, 0xDA, 0, 2, 1, 2, 3, 0xFF, 0xD9]),
             Err(ConvertError::Jpeg { .. })
@@ -734,12 +735,25 @@ mod tests {
                 Err(ConvertError::TruncatedJpeg { len: cut })
             );
         }
-        // A camera's buffer padded with zeros after the end-of-image marker is whole.
-        let mut padded = bytes.clone();
-        padded.extend_from_slice(&[0; 64]);
-        assert_eq!(check_jpeg_whole(&padded), Ok(()));
-        assert_eq!(mjpeg_to_rgb(&padded), mjpeg_to_rgb(&bytes));
+        // A camera's buffer padded with zeros after the end-of-image marker is whole, and so is
+        // a file with a trailer after it.
+        for tail in [&[0u8; 64][..], b"SEFT trailer"] {
+            let mut longer = bytes.clone();
+            longer.extend_from_slice(tail);
+            assert_eq!(check_jpeg_whole(&longer), Ok(()));
+            assert_eq!(mjpeg_to_rgb(&longer), mjpeg_to_rgb(&bytes));
+        }
         assert_eq!(decode_frame(&bytes), mjpeg_to_rgb(&bytes));
+        // An APP1 segment before the scan that holds an end-of-image marker of its own (as an
+        // EXIF thumbnail does) does not make a cut scan whole.
+        let mut with_app1 = vec![0xFF, 0xD8, 0xFF, 0xE1, 0x00, 0x06, 0xFF, 0xD9, 0x00, 0x00];
+        with_app1.extend_from_slice(&bytes[2..]);
+        assert_eq!(check_jpeg_whole(&with_app1), Ok(()));
+        let cut = with_app1.len() - 40;
+        assert_eq!(
+            check_jpeg_whole(&with_app1[..cut]),
+            Err(ConvertError::TruncatedJpeg { len: cut })
+        );
     }
 
     #[test]
