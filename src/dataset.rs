@@ -67,6 +67,10 @@ pub struct RecordingInfo {
     pub performer: String,
     /// The video frame that became dataset frame 0 (earlier ones had no mocap).
     pub first_video_frame: usize,
+    /// Later video frames left out because they could not be read (corrupt, or of another
+    /// size): dataset frame k is the k-th of the others, with its own mocap frame.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub skipped_video_frames: Vec<usize>,
     /// Mocap time (seconds from the BVH's first frame) at which the video's frame 0 was taken.
     pub mocap_offset_s: f64,
     /// How many dataset frames have a hand-made mask in `masks/`.
@@ -651,6 +655,7 @@ mod tests {
                 video: "rec/".into(),
                 performer: "ana".into(),
                 first_video_frame: 1,
+                skipped_video_frames: vec![5],
                 mocap_offset_s: -0.01,
                 masks: 0,
             }),
@@ -661,6 +666,14 @@ mod tests {
         let loaded = Manifest::load(&path).expect("a recorded manifest loads");
         assert_eq!(loaded, recorded);
         assert_eq!(loaded.performer(), "ana");
+        // A manifest from before the skipped frames were recorded reads as none skipped.
+        let text = recorded.to_toml();
+        assert!(text.contains("skipped_video_frames = [5]"), "{text}");
+        std::fs::write(&path, text.replace("skipped_video_frames = [5]\n", "")).expect("write");
+        let older = Manifest::load(&path).expect("loads");
+        assert!(older
+            .recording
+            .is_some_and(|r| r.skipped_video_frames.is_empty()));
         // Without [recording] it must be a generated one, with seed, subject and scene.
         let text = recorded.to_toml();
         let cut = text.find("[recording]").expect("table");

@@ -456,8 +456,19 @@ fn check(suit: &Path, data: Option<&Path>) -> anyhow::Result<()> {
             let masked = (0..dataset.frame_count())
                 .filter(|&k| dataset.has_mask(k))
                 .count();
+            let skipped = match r.skipped_video_frames.as_slice() {
+                [] => String::new(),
+                frames => format!(
+                    ", its unreadable frames {} left out",
+                    frames
+                        .iter()
+                        .map(usize::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            };
             println!(
-                "  recorded: video {} from its frame {}, mocap offset {} s; {masked} frames with masks",
+                "  recorded: video {} from its frame {}{skipped}, mocap offset {} s; {masked} frames with masks",
                 r.video, r.first_video_frame, r.mocap_offset_s
             );
         }

@@ -64,6 +64,9 @@ pub struct ImportReport {
     pub frames: usize,
     /// Video frames taken before the mocap started.
     pub skipped_before: usize,
+    /// Video frames within the mocap that could not be read (corrupt, or of another size), each
+    /// named: left out, the frames after them keep their own mocap frames.
+    pub unreadable: Vec<String>,
     /// Whether the video went on after the mocap (or past `max_frames`).
     pub cut_at_end: bool,
     pub masks: usize,
@@ -302,13 +305,30 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
     let mut first_video_frame = 0usize;
     let mut cut_at_end = false;
     let mut masks = 0usize;
-    while let Some(frame) = video.next_frame().with_context(|| {
-        format!(
-            "{}: video frame {} (a dataset needs every frame; cut the recording before it with --max-frames)",
-            o.video,
-            first_video_frame + source_frames.len()
-        )
-    })? {
+    // Video frames that could not be read: (index, why).
+    let mut unreadable: Vec<(usize, String)> = Vec::new();
+    loop {
+        let frame = match video.next_frame() {
+            Ok(Some(frame)) => frame,
+            Ok(None) => break,
+            // One bad frame leaves a gap in time, as a frame the camera dropped does.
+            Err(
+                e @ (source::SourceError::CorruptFrame { index, .. }
+                | source::SourceError::SizeMismatch { index, .. }),
+            ) => {
+                unreadable.push((index as usize, e.to_string()));
+                continue;
+            }
+            Err(e) => {
+                return Err(e).with_context(|| {
+                    format!(
+                        "{}: the video failed after {} imported frames",
+                        o.video,
+                        source_frames.len()
+                    )
+                })
+            }
+        };
         let index = frame.index as usize;
         let time = frame.timestamp.as_secs_f64();
         let mocap_frame =
@@ -347,6 +367,8 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
         source_frames.push(mocap_frame);
         video_times.push(time);
     }
+    // Those before the mocap's start would have been left out anyway.
+    unreadable.retain(|&(index, _)| index >= first_video_frame);
     let (Some(&first), Some(&last)) = (source_frames.first(), source_frames.last()) else {
         bail!(
             "no frame of {} falls within the mocap ({} frames, {:.2} s) at --offset {} s: the offset is the mocap time of the video's first frame",
@@ -408,6 +430,7 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
             video: o.video.to_owned(),
             performer: o.performer.to_owned(),
             first_video_frame,
+            skipped_video_frames: unreadable.iter().map(|&(index, _)| index).collect(),
             mocap_offset_s: o.offset_s,
             masks,
         }),
@@ -419,6 +442,7 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
         alignment,
         frames: source_frames.len(),
         skipped_before: first_video_frame,
+        unreadable: unreadable.into_iter().map(|(_, why)| why).collect(),
         cut_at_end,
         masks,
         fps,
@@ -442,7 +466,7 @@ fn to_millisecond(seconds: f64) -> f64 {
 pub fn summary(o: &ImportOptions, r: &ImportReport) -> String {
     let out: PathBuf = o.out.to_owned();
     format!(
-        "imported {} frames of {} at {:.3} frames/s with mocap frames {}..={} of {} (offset {} s){}{}; {}; dataset written to {}",
+        "imported {} frames of {} at {:.3} frames/s with mocap frames {}..={} of {} (offset {} s){}{}{}; {}; dataset written to {}",
         r.frames,
         o.video,
         r.fps,
@@ -454,6 +478,12 @@ pub fn summary(o: &ImportOptions, r: &ImportReport) -> String {
             0 => String::new(),
             n => format!(", the first {n} video frames before the mocap left out"),
         },
+        match r.unreadable.len() {
+            0 => String::new(),
+            n => format!(
+                ", {n} video frames that could not be read left out (the others keep their mocap frames; below)"
+            ),
+        },
         if r.cut_at_end {
             ", the video after the mocap's end (or --max-frames) left out"
         } else {
@@ -464,7 +494,12 @@ pub fn summary(o: &ImportOptions, r: &ImportReport) -> String {
             (Some(_), n) => format!("{n} with masks"),
         },
         out.display()
-    ) + &match &r.alignment {
+    ) + &r
+        .unreadable
+        .iter()
+        .map(|why| format!("\n  left out: {why}"))
+        .collect::<String>()
+        + &match &r.alignment {
         None => "\nthe suit has no segmenter yet: the pairing of video and mocap was not checked".to_owned(),
         Some(a) => {
             let mut line = format!(
@@ -719,6 +754,38 @@ mod tests {
         // BVH keeps the frame time to eight decimals.
         assert!((imported.motion.frame_time - 1.0 / 15.0).abs() < 1e-7);
         assert!(imported.mask_path(1).is_file() && !imported.mask_path(0).is_file());
+    }
+
+    #[test]
+    fn an_unreadable_video_frame_is_left_out_and_the_others_keep_their_mocap_frames() {
+        let r = Recording::new();
+        let video = r.tmp.path().join("video");
+        std::fs::create_dir_all(&video).expect("dir");
+        for k in 0..6 {
+            let name = format!("{k:06}.png");
+            std::fs::copy(r.rec.frame_path(k), video.join(&name)).expect("copy");
+        }
+        // Frame 2 cut short, as a copy interrupted or a camera that lost the frame's end.
+        let bytes = std::fs::read(video.join("000002.png")).expect("read");
+        std::fs::write(video.join("000002.png"), &bytes[..bytes.len() / 2]).expect("cut");
+        let video_name = video.to_string_lossy().into_owned();
+        let out = r.tmp.path().join("out");
+        let mut o = r.options(&out);
+        o.video = &video_name;
+        let report = import(&o).expect("imports the others");
+        assert_eq!((report.frames, report.skipped_before), (5, 0));
+        assert_eq!(report.unreadable.len(), 1);
+        assert!(
+            report.unreadable[0].contains("000002.png"),
+            "{:?}",
+            report.unreadable
+        );
+        assert!(summary(&o, &report).contains("1 video frames that could not be read left out"));
+        let imported = Dataset::open(&out).expect("a dataset");
+        assert_eq!(imported.manifest.clip.source_frames, vec![0, 1, 3, 4, 5]);
+        let recording = imported.manifest.recording.as_ref().expect("recorded");
+        assert_eq!(recording.skipped_video_frames, vec![2]);
+        assert_eq!(imported.motion.frame(2), r.rec.motion.frame(3));
     }
 
     #[test]
