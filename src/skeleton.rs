@@ -258,6 +258,42 @@ impl Skeleton {
         self.forward_kinematics(frame, &mut world);
         world.iter().map(|t| Vec3::from(t.translation)).collect()
     }
+
+    /// Which values of a frame are rotations (degrees), in frame order; the others are positions.
+    pub fn rotation_channels(&self) -> Vec<bool> {
+        let mut rotation = vec![false; self.channel_count];
+        for joint in &self.joints {
+            for (k, channel) in joint.channels.iter().enumerate() {
+                if let Some(slot) = rotation.get_mut(joint.first_channel + k) {
+                    *slot = channel.is_rotation();
+                }
+            }
+        }
+        rotation
+    }
+}
+
+/// `out = a + t·(b − a)` value by value, the values `rotation` marks (see
+/// [`Skeleton::rotation_channels`]) by the shortest angular difference in degrees, so that 170° to
+/// −170° passes through 180°, not through 0°. `out` gets `rotation.len()` values; a value missing
+/// from a short frame counts as zero.
+pub fn interpolate_frames(rotation: &[bool], a: &[f32], b: &[f32], t: f32, out: &mut Vec<f32>) {
+    out.clear();
+    out.extend(rotation.iter().enumerate().map(|(k, &is_rotation)| {
+        let va = a.get(k).copied().unwrap_or(0.0);
+        let vb = b.get(k).copied().unwrap_or(0.0);
+        let delta = if is_rotation {
+            shortest_degrees(vb - va)
+        } else {
+            vb - va
+        };
+        va + delta * t
+    }));
+}
+
+/// An angle difference wrapped to [−180°, 180°).
+fn shortest_degrees(delta: f32) -> f32 {
+    (delta + 180.0).rem_euclid(360.0) - 180.0
 }
 
 #[cfg(test)]
@@ -293,6 +329,30 @@ pub(crate) mod tests {
             },
         ])
         .expect("valid fixture")
+    }
+
+    #[test]
+    fn frames_interpolate_rotations_the_short_way_and_positions_straight() {
+        assert_eq!(shortest_degrees(350.0), -10.0);
+        assert_eq!(shortest_degrees(-350.0), 10.0);
+        assert_eq!(shortest_degrees(90.0), 90.0);
+        let arm = two_joint_arm();
+        let rotation = arm.rotation_channels();
+        assert_eq!(
+            rotation,
+            [false, false, false, true, true, true, true, true, true]
+        );
+        let a = [10.0, 0.0, 0.0, 170.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let b = [20.0, 0.0, 0.0, -170.0, 0.0, 0.0, 90.0, 0.0, 0.0];
+        let mut out = Vec::new();
+        interpolate_frames(&rotation, &a, &b, 0.25, &mut out);
+        assert_eq!(out.len(), 9);
+        assert_eq!(out[0], 12.5);
+        assert!((out[3] - 175.0).abs() < 1e-4, "{}", out[3]);
+        assert_eq!(out[6], 22.5);
+        // A short frame's missing values count as zero.
+        interpolate_frames(&rotation, &a[..4], &b, 1.0, &mut out);
+        assert_eq!(out[6], 90.0);
     }
 
     fn close(a: Vec3, b: Vec3) -> bool {

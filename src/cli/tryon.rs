@@ -21,6 +21,7 @@ use suitcap::pipeline::PosePipeline;
 use suitcap::pose::smoothing::{JointLimits, PoseFilter, SmoothingParams, JOINT_LIMITS_FILE};
 use suitcap::preview::{GifPreview, PreviewSettings};
 use suitcap::render::RenderSettings;
+use suitcap::skeleton::interpolate_frames;
 use suitcap::source::{open_source, FrameSource, SourceOptions};
 use suitcap::tryon::runner::{
     self, Controls, FrameTimes, InputKind, Output, PoseStage, RunSummary,
@@ -220,16 +221,19 @@ impl TimingLog {
 }
 
 /// A BVH take being recorded: one frame per input frame, so that BVH frame k is the pose of
-/// the take's k-th video frame. An input frame that never reached the pose stage (corrupt, or
-/// dropped by a live pipeline that was behind) gets the pose before it, as a frame with nobody
-/// in view does; without it every later BVH frame would be one frame early against the video.
+/// the take's k-th video frame. Input frames that never reached the pose stage (corrupt, or
+/// dropped by a live pipeline that was behind) are filled in between the poses before and after
+/// them (rotations the short way, as the cloth's substeps are), or hold the last pose at the end
+/// of a recording; without them every later BVH frame would be early against the video.
 pub struct Take {
     motion: Motion,
     path: PathBuf,
+    /// Which channels are rotations, for the filling in.
+    rotation: Vec<bool>,
     /// The input frame the next BVH frame stands for; `None` until the first frame (a live take
     /// starts at whichever frame is shown when recording starts).
     next_index: Option<u64>,
-    /// BVH frames that hold the pose before for an input frame that had none.
+    /// BVH frames filled in for an input frame that had no pose.
     held: usize,
 }
 
@@ -245,15 +249,16 @@ impl Take {
         Ok(Take {
             motion: Motion::new(skeleton.clone(), 1.0 / fps, Vec::new())?,
             path,
+            rotation: skeleton.rotation_channels(),
             next_index: first_index,
             held: 0,
         })
     }
 
-    /// Records the pose of input frame `index`, first holding the pose before (or, before the
-    /// first pose, this one) over the input frames between the last one pushed and it.
+    /// Records the pose of input frame `index`, first filling in the input frames between the
+    /// last one pushed and it (between the two poses; before the first pose, with this one).
     pub fn push(&mut self, index: u64, frame: &[f32]) -> anyhow::Result<()> {
-        self.hold_until(index, frame)?;
+        self.fill_until(index, frame)?;
         self.motion.push_frame(frame)?;
         self.next_index = self.next_index.map(|next| next.max(index + 1));
         Ok(())
@@ -267,25 +272,29 @@ impl Take {
             0 => Ok(()),
             n => {
                 let last = self.motion.frame(n - 1).to_vec();
-                self.hold_until(input_frames, &last)
+                self.fill_until(input_frames, &last)
             }
         }
     }
 
-    /// Fills the input frames from the next expected one up to `index` (exclusive) with the last
-    /// pose, or `fallback` before the first.
-    fn hold_until(&mut self, index: u64, fallback: &[f32]) -> anyhow::Result<()> {
-        let next = *self.next_index.get_or_insert(index);
-        let missing = index.saturating_sub(next);
+    /// Fills the input frames from the next expected one up to `index` (exclusive): from the
+    /// last pose towards `next`, the pose of frame `index` (the last pose throughout when `next`
+    /// is that pose; `next` throughout before the first pose).
+    fn fill_until(&mut self, index: u64, next: &[f32]) -> anyhow::Result<()> {
+        let expected = *self.next_index.get_or_insert(index);
+        let missing = index.saturating_sub(expected);
         if missing == 0 {
             return Ok(());
         }
-        let hold = match self.motion.frame_count() {
-            0 => fallback.to_vec(),
+        let before = match self.motion.frame_count() {
+            0 => next.to_vec(),
             n => self.motion.frame(n - 1).to_vec(),
         };
-        for _ in 0..missing {
-            self.motion.push_frame(&hold)?;
+        let mut filled = Vec::with_capacity(before.len());
+        for k in 1..=missing {
+            let t = k as f32 / (missing + 1) as f32;
+            interpolate_frames(&self.rotation, &before, next, t, &mut filled);
+            self.motion.push_frame(&filled)?;
         }
         self.held += missing as usize;
         self.next_index = Some(index);
@@ -296,7 +305,7 @@ impl Take {
         self.motion.frame_count()
     }
 
-    /// BVH frames that hold the pose before for an input frame that never reached the pose stage.
+    /// BVH frames filled in for input frames that never reached the pose stage.
     pub fn held(&self) -> usize {
         self.held
     }
@@ -305,7 +314,7 @@ impl Take {
     /// stage.
     fn recorded_line(&self, path: &Path) -> String {
         format!(
-            "recorded {} frames → {} ({} of them hold the pose before, for frames the pipeline dropped or that were corrupt, so the take keeps the camera's time)",
+            "recorded {} frames → {} ({} of them filled in between the poses around them, for frames the pipeline dropped or that were corrupt, so the take keeps the camera's time)",
             self.frames(),
             path.display(),
             self.held
@@ -597,7 +606,7 @@ fn count_frames(input: &str) -> Option<u64> {
 
 fn report(summary: &RunSummary, take: &Take, nobody: usize, timings: &TimingLog) {
     println!(
-        "{} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped (their {} BVH frames hold the pose before); {} camera frames dropped; {:.1} s ({:.1} frames/s)",
+        "{} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped (their {} BVH frames filled in between the poses around them); {} camera frames dropped; {:.1} s ({:.1} frames/s)",
         take.frames(),
         take.path.display(),
         summary.skipped.len(),
@@ -1155,7 +1164,7 @@ mod tests {
     }
 
     #[test]
-    fn a_take_holds_the_pose_before_over_missing_input_frames() {
+    fn a_take_fills_in_missing_input_frames() {
         use suitcap::skeleton::{Channel, Joint, Skeleton};
         let skeleton = Skeleton::new(vec![Joint {
             name: "hip".into(),
@@ -1180,15 +1189,22 @@ mod tests {
             take.push(k, &frame(k)).unwrap();
         }
         take.hold_to_end(8).unwrap();
-        assert_eq!(firsts(&take), [1.0, 1.0, 2.0, 2.0, 4.0, 5.0, 5.0, 5.0]);
+        // Frame 0 takes the first pose; 3 lies between 2 and 4; 6 and 7 hold the last.
+        assert_eq!(firsts(&take), [1.0, 1.0, 2.0, 3.0, 4.0, 5.0, 5.0, 5.0]);
         assert_eq!((take.frames(), take.held()), (8, 4));
-        // A live take starts at the first frame pushed; frames 12 and 13 were dropped.
+        // A live take starts at the first frame pushed; frames 12 and 13 were dropped. The root's
+        // Z rotation (channel 3) goes from 11 to 14 the short way; so it does from 170° to −170°.
         let mut live = Take::new(&skeleton, 30.0, PathBuf::from("take.bvh"), None).unwrap();
         for k in [10, 11, 14] {
             live.push(k, &frame(k)).unwrap();
         }
-        assert_eq!(firsts(&live), [10.0, 11.0, 11.0, 11.0, 14.0]);
+        assert_eq!(firsts(&live), [10.0, 11.0, 12.0, 13.0, 14.0]);
         assert_eq!(live.held(), 2);
+        let mut turn = Take::new(&skeleton, 30.0, PathBuf::from("take.bvh"), Some(0)).unwrap();
+        turn.push(0, &[0.0, 0.0, 0.0, 170.0, 0.0, 0.0]).unwrap();
+        turn.push(2, &[0.0, 0.0, 0.0, -170.0, 0.0, 0.0]).unwrap();
+        let middle = turn.motion.frame(1)[3];
+        assert!((middle.abs() - 180.0).abs() < 1e-4, "{middle}");
         // Nothing to hold before a first pose.
         let mut empty = Take::new(&skeleton, 30.0, PathBuf::from("take.bvh"), Some(0)).unwrap();
         empty.hold_to_end(5).unwrap();

@@ -26,7 +26,7 @@ use glam::{Affine3A, Vec3};
 
 use crate::body::{Body, BodyPart, MissingJoint, Subject};
 use crate::bvh::Motion;
-use crate::skeleton::Skeleton;
+use crate::skeleton::{interpolate_frames, Skeleton};
 
 use super::capsule::Capsule;
 
@@ -179,14 +179,7 @@ impl BodyRig {
     /// A rig from a skeleton (already scaled to the subject) and the body built on it.
     pub fn new(skeleton: Skeleton, body: Body, margin_cm: f32) -> BodyRig {
         let proxies = body_proxies(&body, margin_cm);
-        let mut rotation = vec![false; skeleton.channel_count()];
-        for joint in skeleton.joints() {
-            for (k, channel) in joint.channels.iter().enumerate() {
-                if let Some(slot) = rotation.get_mut(joint.first_channel + k) {
-                    *slot = channel.is_rotation();
-                }
-            }
-        }
+        let rotation = skeleton.rotation_channels();
         let root_channels = match skeleton.joints().first() {
             Some(root) => root.first_channel..root.first_channel + root.channels.len(),
             None => 0..0,
@@ -253,18 +246,7 @@ impl BodyRig {
     /// `out = a + t·(b − a)` channel by channel, rotations by the shortest angular difference
     /// (degrees). Missing values in a short frame count as zero.
     pub fn interpolate(&self, a: &[f32], b: &[f32], t: f32, out: &mut Vec<f32>) {
-        let n = self.skeleton.channel_count();
-        out.clear();
-        out.extend((0..n).map(|k| {
-            let va = a.get(k).copied().unwrap_or(0.0);
-            let vb = b.get(k).copied().unwrap_or(0.0);
-            let delta = if self.rotation[k] {
-                shortest_degrees(vb - va)
-            } else {
-                vb - va
-            };
-            va + delta * t
-        }));
+        interpolate_frames(&self.rotation, a, b, t, out);
     }
 
     /// Root joint position for a frame (world, centimetres).
@@ -300,9 +282,6 @@ impl BodyRig {
 }
 
 /// `delta` wrapped into [−180°, 180°).
-fn shortest_degrees(delta: f32) -> f32 {
-    (delta + 180.0).rem_euclid(360.0) - 180.0
-}
 
 #[cfg(test)]
 mod tests {
@@ -376,9 +355,6 @@ mod tests {
 
     #[test]
     fn rotations_interpolate_the_short_way() {
-        assert_eq!(shortest_degrees(350.0), -10.0);
-        assert_eq!(shortest_degrees(-350.0), 10.0);
-        assert_eq!(shortest_degrees(90.0), 90.0);
         let clip =
             Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
         let motion = Motion::load(&clip).expect("clip");
