@@ -281,8 +281,6 @@ impl BodyRig {
     }
 }
 
-/// `delta` wrapped into [−180°, 180°).
-
 #[cfg(test)]
 mod tests {
     use super::*;
