@@ -380,6 +380,11 @@ pub fn layout_colour(seed: u64, colours: usize, surface: u32, row: i32, column: 
 }
 
 impl SuitSkeleton {
+    /// The joints' names (the suit's own, not the BVH's), root first.
+    pub fn joint_names(&self) -> Vec<String> {
+        self.joints.iter().map(|j| j.name.clone()).collect()
+    }
+
     /// Index in `skeleton` of each suit joint, checking that every name exists and every suit parent
     /// is an ancestor of its child in the BVH hierarchy.
     pub fn bind(&self, skeleton: &Skeleton) -> Result<Vec<usize>, BindError> {

@@ -670,13 +670,7 @@ pub fn demo(suit_dir: &Path, out: &Path) -> anyhow::Result<()> {
     let take = Motion::load(&out.join("take.bvh"))?;
     let suit = suitcap::suit::SuitDefinition::load_dir(suit_dir)?;
     let layout = suitcap::pose::PoseLayout::new(&suit.skeleton, &truth.skeleton)?;
-    let mut errors = suitcap::pose::eval::JointErrors::new(
-        suit.skeleton
-            .joints
-            .iter()
-            .map(|j| j.name.clone())
-            .collect(),
-    );
+    let mut errors = suitcap::pose::eval::JointErrors::new(suit.skeleton.joint_names());
     for k in 0..truth.frame_count().min(take.frame_count()) {
         errors.add(&layout, truth.frame(k), take.frame(k));
     }

@@ -16,6 +16,7 @@ use clap::{Parser, Subcommand};
 use suitcap::dataset::Dataset;
 use suitcap::manifest::{DatasetRecord, Manifest, MANIFEST_FILE, MANIFEST_FORMAT};
 use suitcap::mask::Mask;
+use suitcap::pipeline::PosePipeline;
 use suitcap::pose::chart::{BarChart, Series};
 use suitcap::pose::eval::{JointErrors, PositionErrors};
 use suitcap::pose::{PoseLayout, RotationEncoding};
@@ -1282,183 +1283,113 @@ fn worst_frame(frames: &[FrameError]) -> Option<(usize, f64)> {
         .max_by(|a, b| a.1.total_cmp(&b.1))
 }
 
-/// Runs a trained suit over datasets with ground truth and accumulates the joint errors.
+/// One dataset's part of an evaluation: its errors, the sums [`evaluate`] adds up over all, and
+/// the line it prints for it.
+struct DatasetRun {
+    summary: DatasetErrors,
+    angles: JointErrors,
+    positions: PositionErrors,
+    /// The raw regression through each of the runtime's filters, in [`FILTER_VARIANTS`]' order.
+    filtered: Vec<JointErrors>,
+    frames: Vec<FrameError>,
+    /// Root position error sums (cm) before and after the position correction, frames, and
+    /// frames the correction moved.
+    root: (f64, f64, usize, usize),
+    /// Frames whose root depth came from the marker grid.
+    marker_depth_frames: usize,
+    /// Root reprojection error sums (pixels) before and after, and frames: what decides where a
+    /// garment is drawn.
+    root_pixels: (f64, f64, usize),
+    /// Estimated over true root depth along the optical axis, after the correction.
+    depth_ratios: Vec<f32>,
+    line: String,
+}
+
+/// The runtime's pose filter, switched on piece by piece: (label, smoothing, joint limits).
+const FILTER_VARIANTS: [(&str, bool, bool); 3] = [
+    ("One-Euro smoothing", true, false),
+    ("joint limits", false, true),
+    ("smoothing + limits", true, true),
+];
+
+/// Runs a trained suit over datasets with ground truth and accumulates the joint errors. The
+/// datasets are independent streams, each with a pipeline of its own, so they run in parallel.
 fn evaluate(
     suit_dir: &Path,
     data: &[PathBuf],
     truth_masks: bool,
     verbose: bool,
 ) -> anyhow::Result<Evaluation> {
-    use suitcap::pipeline::PosePipeline;
-    let mut pipeline = PosePipeline::load(suit_dir)?;
-    let names: Vec<String> = pipeline
-        .suit
-        .skeleton
-        .joints
-        .iter()
-        .map(|j| j.name.clone())
-        .collect();
-    let mut all = JointErrors::new(names.clone());
-    let mut all_positions = PositionErrors::new(&names);
-    let mut per_dataset = Vec::new();
-    // The runtime's pose filter, switched on piece by piece: (label, smoothing, limits, errors).
-    use suitcap::pose::smoothing::{JointLimits, PoseFilter, SmoothingParams, JOINT_LIMITS_FILE};
+    use rayon::prelude::*;
+    use suitcap::pose::smoothing::{JointLimits, JOINT_LIMITS_FILE};
     let limits_path = suit_dir.join(JOINT_LIMITS_FILE);
     let limits = limits_path
         .exists()
         .then(|| JointLimits::load(&limits_path))
         .transpose()?;
-    let mut variants: Vec<(&str, bool, bool, JointErrors)> = [
-        ("One-Euro smoothing", true, false),
-        ("joint limits", false, true),
-        ("smoothing + limits", true, true),
-    ]
-    .into_iter()
-    .filter(|&(_, _, lim)| !lim || limits.is_some())
-    .map(|(label, smooth, lim)| (label, smooth, lim, JointErrors::new(names.clone())))
-    .collect();
-    // Root position error sums (cm) before and after the position correction, frames, corrected frames.
-    let mut root = (0.0f64, 0.0f64, 0usize, 0usize);
-    // Frames whose root depth came from the marker grid.
-    let mut marker_depth_frames = 0usize;
-    // Root reprojection error (pixels) before and after: what decides where a garment is drawn.
-    let mut root_pixels = (0.0f64, 0.0f64, 0usize);
-    // Estimated over true root depth along the optical axis, after the correction: per dataset and all.
-    let mut depth_ratios_all = Vec::new();
-    let mut depth_ratio_medians = Vec::new();
-    let mut per_frame = Vec::new();
-    for (dataset_index, dir) in data.iter().enumerate() {
-        let dataset = Dataset::open(dir)?;
-        let layout =
-            suitcap::pose::PoseLayout::new(&pipeline.suit.skeleton, &dataset.motion.skeleton)?;
-        pipeline.reset();
-        let mut errors = JointErrors::new(names.clone());
-        let mut positions = PositionErrors::new(&names);
-        let mut missed = 0;
-        let mut depth_ratios = Vec::new();
-        let skeleton = pipeline.regressor.skeleton.skeleton.clone();
-        let mut filters: Vec<PoseFilter> = variants
-            .iter()
-            .map(|&(_, smooth, lim, _)| {
-                PoseFilter::new(
-                    &skeleton,
-                    smooth.then(SmoothingParams::default),
-                    limits.as_ref().filter(|_| lim),
-                )
-            })
-            .collect();
-        let frame_time = dataset.motion.frame_time;
-        let root_of = |values: &[f32]| {
-            glam::Vec3::from_array(layout.root_position.map(|c| values[c]))
-                + dataset.motion.skeleton.joint(0).offset
-        };
-        let first_frame = per_frame.len();
-        for index in 0..dataset.frame_count() {
-            let image = read_frame(&dataset, index)?;
-            // The dataset's masks are read only when asked for: a recording may have few.
-            let truth = if truth_masks {
-                Some(read_mask(&dataset, index)?)
-            } else {
-                None
-            };
-            let given = truth.as_ref().map(suitcap::body_size::Silhouette::whole);
-            let result = pipeline.process(&image, &dataset.camera, given);
-            let mut record = FrameError {
-                dataset: dataset_index,
-                frame: index,
-                angles_deg: None,
-                position_cm: None,
-                root_cm: None,
-                root_px: None,
-                root_px_regressed: None,
-            };
-            if !result.person {
-                missed += 1;
-                filters.iter_mut().for_each(PoseFilter::reset);
-                per_frame.push(record);
-                continue;
-            }
-            let mut this_frame = JointErrors::new(names.clone());
-            this_frame.add(&layout, dataset.motion.frame(index), &result.frame);
-            errors.merge(&this_frame);
-            record.angles_deg = Some((this_frame.mean_euler(), this_frame.mean_geodesic()));
-            let mut this_positions = PositionErrors::new(&names);
-            this_positions.add(
-                &dataset.motion.skeleton,
-                &layout,
-                dataset.motion.frame(index),
-                &result.frame,
-            );
-            positions.merge(&this_positions);
-            record.position_cm = Some(this_positions.mean_cm());
-            for (filter, variant) in filters.iter_mut().zip(variants.iter_mut()) {
-                let mut filtered = result.frame.clone();
-                filter.apply(index as f64 * frame_time, &mut filtered);
-                variant
-                    .3
-                    .add(&layout, dataset.motion.frame(index), &filtered);
-            }
-            // The regressor's skeleton is one subject's; compare root positions in the world frame.
-            let truth_root = root_of(dataset.motion.frame(index));
-            let before = glam::Vec3::from_array(result.root_before_correction)
-                + pipeline.regressor.skeleton.skeleton.joint(0).offset;
-            let after = root_of(&result.frame) - dataset.motion.skeleton.joint(0).offset
-                + pipeline.regressor.skeleton.skeleton.joint(0).offset;
-            root.0 += before.distance(truth_root) as f64;
-            root.1 += after.distance(truth_root) as f64;
-            record.root_cm = Some(after.distance(truth_root) as f64);
-            let camera = &dataset.camera;
-            if let (Some(t), Some(b), Some(a)) = (
-                camera.project(truth_root),
-                camera.project(before),
-                camera.project(after),
-            ) {
-                root_pixels.0 += b.pixel.distance(t.pixel) as f64;
-                root_pixels.1 += a.pixel.distance(t.pixel) as f64;
-                record.root_px = Some(a.pixel.distance(t.pixel) as f64);
-                record.root_px_regressed = Some(b.pixel.distance(t.pixel) as f64);
-                root_pixels.2 += 1;
-                depth_ratios.push(a.depth / t.depth);
-            }
-            root.2 += 1;
-            root.3 += result.correction.is_some() as usize;
-            marker_depth_frames += result.marker_depth_cm.is_some() as usize;
-            per_frame.push(record);
-        }
+    let variants: Vec<(&str, bool, bool)> = FILTER_VARIANTS
+        .into_iter()
+        .filter(|&(_, _, lim)| !lim || limits.is_some())
+        .collect();
+    let runs = data
+        .par_iter()
+        .enumerate()
+        .map(|(index, dir)| {
+            evaluate_dataset(
+                suit_dir,
+                index,
+                dir,
+                truth_masks,
+                limits.as_ref(),
+                &variants,
+            )
+        })
+        .collect::<anyhow::Result<Vec<DatasetRun>>>()?;
+    let names = match runs.first() {
+        Some(run) => run.angles.names.clone(),
+        None => PosePipeline::load(suit_dir)?.suit.skeleton.joint_names(),
+    };
+    let mut all = JointErrors::new(names.clone());
+    let mut all_positions = PositionErrors::new(&names);
+    let mut filtered: Vec<JointErrors> = variants
+        .iter()
+        .map(|_| JointErrors::new(names.clone()))
+        .collect();
+    let (mut root, mut root_pixels, mut marker_depth_frames) = ((0.0, 0.0, 0, 0), (0.0, 0.0, 0), 0);
+    let (mut depth_ratios_all, mut depth_ratio_medians) = (Vec::new(), Vec::new());
+    let (mut per_dataset, mut per_frame) = (Vec::new(), Vec::new());
+    for run in runs {
         if verbose {
-            let worst = worst_frame(&per_frame[first_frame..]).map_or(String::new(), |(k, e)| {
-                format!("; worst frame {k} ({e:.2}°)")
-            });
-            println!(
-                "{}: {} frames ({} with nobody found), clip {}, subject {}: mean joint angle error {:.2}° (Euler), {:.2}° (geodesic); joints {:.1} cm from the truth with the root aligned{worst}",
-                dir.display(),
-                dataset.frame_count(),
-                missed,
-                dataset.manifest.clip.name,
-                dataset.manifest.performer(),
-                errors.mean_euler(),
-                errors.mean_geodesic(),
-                positions.mean_cm()
-            );
+            println!("{}", run.line);
         }
-        depth_ratios_all.extend_from_slice(&depth_ratios);
-        depth_ratio_medians.push(median(&depth_ratios));
-        all.merge(&errors);
-        all_positions.merge(&positions);
-        per_dataset.push(DatasetErrors {
-            name: dir.display().to_string(),
-            euler_deg: errors.mean_euler(),
-            geodesic_deg: errors.mean_geodesic(),
-            position_cm: positions.mean_cm(),
-            frames: errors.frames,
-        });
+        all.merge(&run.angles);
+        all_positions.merge(&run.positions);
+        for (sum, errors) in filtered.iter_mut().zip(&run.filtered) {
+            sum.merge(errors);
+        }
+        root = (
+            root.0 + run.root.0,
+            root.1 + run.root.1,
+            root.2 + run.root.2,
+            root.3 + run.root.3,
+        );
+        root_pixels = (
+            root_pixels.0 + run.root_pixels.0,
+            root_pixels.1 + run.root_pixels.1,
+            root_pixels.2 + run.root_pixels.2,
+        );
+        marker_depth_frames += run.marker_depth_frames;
+        depth_ratio_medians.push(median(&run.depth_ratios));
+        depth_ratios_all.extend(run.depth_ratios);
+        per_dataset.push(run.summary);
+        per_frame.extend(run.frames);
     }
     if verbose {
         println!(
             "mean joint angle error of the raw regression: {:.2}° (Euler)",
             all.mean_euler()
         );
-        for (label, _, _, errors) in &variants {
+        for ((label, _, _), errors) in variants.iter().zip(&filtered) {
             println!("  with {label}: {:.2}° (Euler)", errors.mean_euler());
         }
         if limits.is_none() {
@@ -1501,6 +1432,151 @@ fn evaluate(
         datasets: per_dataset,
         frames: per_frame,
     })
+}
+
+/// Runs a pipeline of its own over dataset `dir` (number `dataset_index` of the evaluation),
+/// with the raw regression also through each filter of `variants` (see [`FILTER_VARIANTS`]).
+fn evaluate_dataset(
+    suit_dir: &Path,
+    dataset_index: usize,
+    dir: &Path,
+    truth_masks: bool,
+    limits: Option<&suitcap::pose::smoothing::JointLimits>,
+    variants: &[(&str, bool, bool)],
+) -> anyhow::Result<DatasetRun> {
+    use suitcap::pose::smoothing::{PoseFilter, SmoothingParams};
+    let mut pipeline = PosePipeline::load(suit_dir)?;
+    let names = pipeline.suit.skeleton.joint_names();
+    let dataset = Dataset::open(dir)?;
+    let layout = suitcap::pose::PoseLayout::new(&pipeline.suit.skeleton, &dataset.motion.skeleton)?;
+    let mut run = DatasetRun {
+        summary: DatasetErrors {
+            name: dir.display().to_string(),
+            euler_deg: 0.0,
+            geodesic_deg: 0.0,
+            position_cm: 0.0,
+            frames: 0,
+        },
+        angles: JointErrors::new(names.clone()),
+        positions: PositionErrors::new(&names),
+        filtered: variants
+            .iter()
+            .map(|_| JointErrors::new(names.clone()))
+            .collect(),
+        frames: Vec::with_capacity(dataset.frame_count()),
+        root: (0.0, 0.0, 0, 0),
+        marker_depth_frames: 0,
+        root_pixels: (0.0, 0.0, 0),
+        depth_ratios: Vec::new(),
+        line: String::new(),
+    };
+    let mut missed = 0;
+    let skeleton = pipeline.regressor.skeleton.skeleton.clone();
+    let mut filters: Vec<PoseFilter> = variants
+        .iter()
+        .map(|&(_, smooth, lim)| {
+            PoseFilter::new(
+                &skeleton,
+                smooth.then(SmoothingParams::default),
+                limits.filter(|_| lim),
+            )
+        })
+        .collect();
+    let frame_time = dataset.motion.frame_time;
+    let root_of = |values: &[f32]| {
+        glam::Vec3::from_array(layout.root_position.map(|c| values[c]))
+            + dataset.motion.skeleton.joint(0).offset
+    };
+    for index in 0..dataset.frame_count() {
+        let image = read_frame(&dataset, index)?;
+        // The dataset's masks are read only when asked for: a recording may have few.
+        let truth = if truth_masks {
+            Some(read_mask(&dataset, index)?)
+        } else {
+            None
+        };
+        let given = truth.as_ref().map(suitcap::body_size::Silhouette::whole);
+        let result = pipeline.process(&image, &dataset.camera, given);
+        let mut record = FrameError {
+            dataset: dataset_index,
+            frame: index,
+            angles_deg: None,
+            position_cm: None,
+            root_cm: None,
+            root_px: None,
+            root_px_regressed: None,
+        };
+        if !result.person {
+            missed += 1;
+            filters.iter_mut().for_each(PoseFilter::reset);
+            run.frames.push(record);
+            continue;
+        }
+        let truth_frame = dataset.motion.frame(index);
+        let mut this_frame = JointErrors::new(names.clone());
+        this_frame.add(&layout, truth_frame, &result.frame);
+        run.angles.merge(&this_frame);
+        record.angles_deg = Some((this_frame.mean_euler(), this_frame.mean_geodesic()));
+        let mut this_positions = PositionErrors::new(&names);
+        this_positions.add(
+            &dataset.motion.skeleton,
+            &layout,
+            truth_frame,
+            &result.frame,
+        );
+        run.positions.merge(&this_positions);
+        record.position_cm = Some(this_positions.mean_cm());
+        for (filter, errors) in filters.iter_mut().zip(run.filtered.iter_mut()) {
+            let mut filtered = result.frame.clone();
+            filter.apply(index as f64 * frame_time, &mut filtered);
+            errors.add(&layout, truth_frame, &filtered);
+        }
+        // The regressor's skeleton is one subject's; compare root positions in the world frame.
+        let truth_root = root_of(truth_frame);
+        let regressor_root = pipeline.regressor.skeleton.skeleton.joint(0).offset;
+        let before = glam::Vec3::from_array(result.root_before_correction) + regressor_root;
+        let after =
+            root_of(&result.frame) - dataset.motion.skeleton.joint(0).offset + regressor_root;
+        run.root.0 += before.distance(truth_root) as f64;
+        run.root.1 += after.distance(truth_root) as f64;
+        record.root_cm = Some(after.distance(truth_root) as f64);
+        let camera = &dataset.camera;
+        if let (Some(t), Some(b), Some(a)) = (
+            camera.project(truth_root),
+            camera.project(before),
+            camera.project(after),
+        ) {
+            run.root_pixels.0 += b.pixel.distance(t.pixel) as f64;
+            run.root_pixels.1 += a.pixel.distance(t.pixel) as f64;
+            record.root_px = Some(a.pixel.distance(t.pixel) as f64);
+            record.root_px_regressed = Some(b.pixel.distance(t.pixel) as f64);
+            run.root_pixels.2 += 1;
+            run.depth_ratios.push(a.depth / t.depth);
+        }
+        run.root.2 += 1;
+        run.root.3 += result.correction.is_some() as usize;
+        run.marker_depth_frames += result.marker_depth_cm.is_some() as usize;
+        run.frames.push(record);
+    }
+    let worst = worst_frame(&run.frames).map_or(String::new(), |(k, e)| {
+        format!("; worst frame {k} ({e:.2}°)")
+    });
+    run.line = format!(
+        "{}: {} frames ({} with nobody found), clip {}, subject {}: mean joint angle error {:.2}° (Euler), {:.2}° (geodesic); joints {:.1} cm from the truth with the root aligned{worst}",
+        dir.display(),
+        dataset.frame_count(),
+        missed,
+        dataset.manifest.clip.name,
+        dataset.manifest.performer(),
+        run.angles.mean_euler(),
+        run.angles.mean_geodesic(),
+        run.positions.mean_cm()
+    );
+    run.summary.euler_deg = run.angles.mean_euler();
+    run.summary.geodesic_deg = run.angles.mean_geodesic();
+    run.summary.position_cm = run.positions.mean_cm();
+    run.summary.frames = run.angles.frames;
+    Ok(run)
 }
 
 fn eval(
@@ -1727,12 +1803,7 @@ fn experiments(
     }
     suitcap::io::write_atomic(&out.join("experiments.csv"), csv.as_bytes())
         .context("cannot write experiments.csv")?;
-    let names: Vec<String> = suit
-        .skeleton
-        .joints
-        .iter()
-        .map(|j| j.name.clone())
-        .collect();
+    let names: Vec<String> = suit.skeleton.joint_names();
     let largest = bases.iter().copied().max().unwrap_or(0);
     let chart = BarChart {
         title: format!("Mean joint angle error (°, Euler) with S = {largest}"),
