@@ -67,8 +67,9 @@ pub struct RecordingInfo {
     pub performer: String,
     /// The video frame that became dataset frame 0 (earlier ones had no mocap).
     pub first_video_frame: usize,
-    /// Later video frames left out because they could not be read (corrupt, or of another
-    /// size): dataset frame k is the k-th of the others, with its own mocap frame.
+    /// Video frames between the first and the last imported one that were left out because they
+    /// could not be read (corrupt, or of another size): dataset frame k is the k-th of the
+    /// others, with its own mocap frame.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub skipped_video_frames: Vec<usize>,
     /// Mocap time (seconds from the BVH's first frame) at which the video's frame 0 was taken.

@@ -305,8 +305,9 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
     let mut first_video_frame = 0usize;
     let mut cut_at_end = false;
     let mut masks = 0usize;
-    // Video frames that could not be read: (index, why).
+    // Video frames that could not be read: (index, why); and the last one imported.
     let mut unreadable: Vec<(usize, String)> = Vec::new();
+    let mut last_video_frame = 0usize;
     loop {
         let frame = match video.next_frame() {
             Ok(Some(frame)) => frame,
@@ -366,8 +367,10 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
         }
         source_frames.push(mocap_frame);
         video_times.push(time);
+        last_video_frame = index;
     }
-    // Those before the mocap's start would have been left out anyway.
+    // Those before the mocap's start would have been left out anyway; those after the last
+    // imported frame are named but leave no gap in the dataset.
     unreadable.retain(|&(index, _)| index >= first_video_frame);
     let (Some(&first), Some(&last)) = (source_frames.first(), source_frames.last()) else {
         bail!(
@@ -430,7 +433,11 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
             video: o.video.to_owned(),
             performer: o.performer.to_owned(),
             first_video_frame,
-            skipped_video_frames: unreadable.iter().map(|&(index, _)| index).collect(),
+            skipped_video_frames: unreadable
+                .iter()
+                .map(|&(index, _)| index)
+                .filter(|&index| index < last_video_frame)
+                .collect(),
             mocap_offset_s: o.offset_s,
             masks,
         }),
