@@ -11,9 +11,12 @@
 //! ffmpeg extension `XCOLORRANGE=FULL|LIMITED` says otherwise.
 //!
 //! The segmenter receives RGB frames stamped `index / F`. A truncated final
-//! frame gives [`SourceError::TruncatedFrame`] naming its index; a frame that
-//! does not start with `FRAME` gives [`SourceError::CorruptFrame`]; after
-//! either the stream ends (`Ok(None)`) because the data cannot be resynced.
+//! frame gives [`SourceError::TruncatedFrame`] naming its index, and the stream
+//! ends. A frame that does not start with `FRAME` (a damaged file) gives
+//! [`SourceError::CorruptFrame`]; the reader then looks for the next `FRAME`
+//! line further on (six bytes that planar pixel data all but never holds) and
+//! goes on from there, numbering the frames after it by the bytes passed over,
+//! so that their timestamps stay right; without one the stream ends.
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Read, Write};
@@ -230,6 +233,8 @@ pub struct Y4mReader<R> {
     frame_bytes: usize,
     next_index: u64,
     ended: bool,
+    /// The next frame's `FRAME` line was read while looking for it after a damaged frame.
+    marker_read: bool,
     buffer: Vec<u8>,
 }
 
@@ -273,6 +278,7 @@ impl<R: BufRead> Y4mReader<R> {
             frame_bytes,
             next_index: 0,
             ended: false,
+            marker_read: false,
             buffer: Vec::new(),
         })
     }
@@ -283,7 +289,6 @@ impl<R: BufRead> Y4mReader<R> {
     }
 
     fn corrupt(&mut self, index: u64, reason: String) -> SourceError {
-        self.ended = true;
         SourceError::CorruptFrame {
             source_name: self.name.clone(),
             index,
@@ -309,6 +314,57 @@ impl<R: BufRead> Y4mReader<R> {
         }
     }
 
+    /// After frame `index` did not start with a FRAME line (`read` bytes of it consumed), reads
+    /// on to the next FRAME line and through it, numbers the next frame by the bytes passed over
+    /// (at least one frame on) and says how many frames on that is; `None` when the data ends
+    /// first.
+    fn find_next_marker(&mut self, index: u64, read: usize) -> std::io::Result<Option<u64>> {
+        // Bytes of the marker matched so far, and bytes passed over before it.
+        let (mut matched, mut passed) = (0usize, read);
+        let delimiter = loop {
+            let buf = self.reader.fill_buf()?;
+            if buf.is_empty() {
+                return Ok(None);
+            }
+            let (mut used, mut found) = (0, None);
+            for &b in buf {
+                used += 1;
+                if matched == FRAME_MARKER.len() {
+                    if matches!(b, b'\n' | b' ' | b'\r') {
+                        found = Some(b);
+                        break;
+                    }
+                    passed += matched;
+                    matched = 0;
+                }
+                if b == FRAME_MARKER[matched] {
+                    matched += 1;
+                } else {
+                    // "FRAME" has no repeated letter, so a mismatch restarts at this byte.
+                    passed += matched;
+                    matched = usize::from(b == FRAME_MARKER[0]);
+                    passed += 1 - matched;
+                }
+            }
+            self.reader.consume(used);
+            if let Some(d) = found {
+                break d;
+            }
+        };
+        if delimiter != b'\n' {
+            // The marker's parameters, up to its line's end.
+            let rest = read_line(&mut self.reader, MAX_LINE)?;
+            if !rest.terminated {
+                return Ok(None);
+            }
+        }
+        let frame = (self.frame_bytes + FRAME_MARKER.len() + 1) as f64;
+        let lost = ((passed as f64 / frame).round() as u64).max(1);
+        self.next_index = index + lost;
+        self.marker_read = true;
+        Ok(Some(lost))
+    }
+
     /// Next frame as (index, image); `Ok(None)` at the end of the data or
     /// after an error that leaves the stream unreadable.
     pub fn read_frame(&mut self) -> Result<Option<(u64, RgbImage)>, SourceError> {
@@ -317,33 +373,41 @@ impl<R: BufRead> Y4mReader<R> {
         }
         let index = self.next_index;
         self.next_index += 1;
-        let line = match read_line(&mut self.reader, MAX_LINE) {
-            Ok(line) => line,
-            Err(source) => return Err(self.io_error(source)),
-        };
-        if line.bytes.is_empty() && !line.terminated {
-            self.ended = true;
-            return Ok(None);
-        }
-        let has_marker = line.bytes.starts_with(FRAME_MARKER)
-            && matches!(
-                line.bytes.get(FRAME_MARKER.len()),
-                None | Some(b' ') | Some(b'\r')
-            );
-        if !line.terminated {
-            if line.bytes.len() > MAX_LINE {
-                return Err(self.corrupt(index, format!("FRAME line longer than {MAX_LINE} bytes")));
+        if !std::mem::take(&mut self.marker_read) {
+            let line = match read_line(&mut self.reader, MAX_LINE) {
+                Ok(line) => line,
+                Err(source) => return Err(self.io_error(source)),
+            };
+            if line.bytes.is_empty() && !line.terminated {
+                self.ended = true;
+                return Ok(None);
             }
-            if has_marker || FRAME_MARKER.starts_with(&line.bytes) {
+            let has_marker = line.bytes.starts_with(FRAME_MARKER)
+                && matches!(
+                    line.bytes.get(FRAME_MARKER.len()),
+                    None | Some(b' ') | Some(b'\r')
+                );
+            if !line.terminated && (has_marker || FRAME_MARKER.starts_with(&line.bytes)) {
                 return Err(self.truncated(index, 0));
             }
-        }
-        if !has_marker {
-            let shown: String = String::from_utf8_lossy(&line.bytes)
-                .chars()
-                .take(20)
-                .collect();
-            return Err(self.corrupt(index, format!("expected a FRAME line, found {shown:?}")));
+            if !has_marker {
+                let shown: String = String::from_utf8_lossy(&line.bytes)
+                    .chars()
+                    .take(20)
+                    .collect();
+                let read = line.bytes.len() + usize::from(line.terminated);
+                let reason = match self.find_next_marker(index, read) {
+                    Ok(Some(lost)) => format!(
+                        "expected a FRAME line, found {shown:?}; going on at the next FRAME line, {lost} frame(s) on"
+                    ),
+                    Ok(None) => {
+                        self.ended = true;
+                        format!("expected a FRAME line, found {shown:?}; no FRAME line follows")
+                    }
+                    Err(source) => return Err(self.io_error(source)),
+                };
+                return Err(self.corrupt(index, reason));
+            }
         }
         self.buffer.clear();
         let got = match (&mut self.reader)
@@ -741,10 +805,56 @@ mod tests {
     fn garbage_instead_of_frame_is_corrupt() {
         let data = b"YUV4MPEG2 W2 H2 C444\nGARBAGE\n0123456789AB";
         let mut r = reader(data).unwrap();
-        assert!(matches!(
-            r.read_frame(),
-            Err(SourceError::CorruptFrame { index: 0, .. })
-        ));
+        match r.read_frame() {
+            Err(SourceError::CorruptFrame {
+                index: 0, reason, ..
+            }) => assert!(reason.contains("no FRAME line follows"), "{reason}"),
+            other => panic!("expected CorruptFrame, got {other:?}"),
+        }
+        assert!(r.read_frame().unwrap().is_none());
+    }
+
+    #[test]
+    fn after_a_damaged_frame_the_next_frame_line_is_found() {
+        // Four 2x2 4:4:4 frames of 12 bytes each; each frame's samples are its number.
+        let mut data = b"YUV4MPEG2 W2 H2 F30:1 C444\n".to_vec();
+        for k in 0..4u8 {
+            data.extend_from_slice(b"FRAME\n");
+            data.extend_from_slice(&[100 + k; 12]);
+        }
+        let frame_len = 6 + 12;
+        let header_len = data.len() - 4 * frame_len;
+        // Frame 1's marker damaged; frame 2's marker written with a parameter.
+        data[header_len + frame_len + 3] = b'X';
+        let mut with_parameter = data[..header_len + 2 * frame_len].to_vec();
+        with_parameter.extend_from_slice(b"FRAME Ixyz\n");
+        with_parameter.extend_from_slice(&data[header_len + 2 * frame_len + 6..]);
+        let mut r = reader(&with_parameter).unwrap();
+        let (i0, first) = r.read_frame().unwrap().unwrap();
+        assert_eq!(i0, 0);
+        match r.read_frame() {
+            Err(SourceError::CorruptFrame {
+                index: 1, reason, ..
+            }) => assert!(reason.contains("1 frame(s) on"), "{reason}"),
+            other => panic!("expected CorruptFrame, got {other:?}"),
+        }
+        let (i2, third) = r.read_frame().unwrap().unwrap();
+        let (i3, _) = r.read_frame().unwrap().unwrap();
+        assert_eq!((i2, i3), (2, 3));
+        assert_ne!(first, third);
+        assert!(r.read_frame().unwrap().is_none());
+        // Frames 1 and 2 damaged at once (two markers gone): the next one is frame 3.
+        let mut two = data.clone();
+        two[header_len + 2 * frame_len + 1] = b'x';
+        let mut r = reader(&two).unwrap();
+        assert_eq!(r.read_frame().unwrap().unwrap().0, 0);
+        match r.read_frame() {
+            Err(SourceError::CorruptFrame {
+                index: 1, reason, ..
+            }) => assert!(reason.contains("2 frame(s) on"), "{reason}"),
+            other => panic!("expected CorruptFrame, got {other:?}"),
+        }
+        assert_eq!(r.read_frame().unwrap().unwrap().0, 3);
         assert!(r.read_frame().unwrap().is_none());
     }
 
