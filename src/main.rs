@@ -573,6 +573,7 @@ fn segment(
     let mut times = Vec::new();
     // Per frame scored against the truth: how the mask agrees with it, and the frame's name.
     let mut scored: Vec<(suitcap::mask::Agreement, String)> = Vec::new();
+    let mut unscored = 0usize;
     let (mut cleaned_frames, mut removed_px, mut filled_px, mut off_cloth_px, mut empty_frames) =
         (0usize, 0usize, 0usize, 0usize, 0usize);
     // The last frame's height, for the cut's factor in the summary.
@@ -614,11 +615,26 @@ fn segment(
             .save(&path)
             .with_context(|| format!("cannot write {}", path.display()))?;
         if let Some(truth) = truth {
+            // Only the frames with a truth mask are scored (a few may have been labelled).
             let truth_path = truth.join(&name);
-            let gt = image::open(&truth_path)
-                .with_context(|| format!("cannot read {}", truth_path.display()))?
-                .to_luma8();
-            scored.push((result.mask.agreement(&Mask::from_gray(&gt)), name.clone()));
+            if truth_path.is_file() {
+                let gt = image::open(&truth_path)
+                    .with_context(|| format!("cannot read {}", truth_path.display()))?
+                    .to_luma8();
+                if gt.dimensions() != frame.image.dimensions() {
+                    bail!(
+                        "{}: a {}x{} truth mask for a {}x{} frame",
+                        truth_path.display(),
+                        gt.width(),
+                        gt.height(),
+                        frame.image.width(),
+                        frame.image.height()
+                    );
+                }
+                scored.push((result.mask.agreement(&Mask::from_gray(&gt)), name.clone()));
+            } else {
+                unscored += 1;
+            }
         }
         frames += 1;
     }
@@ -670,6 +686,12 @@ fn segment(
             worst.1,
             100.0 * missed / n,
             100.0 * extra / n,
+        );
+    }
+    if let Some(truth) = truth.filter(|_| unscored > 0) {
+        println!(
+            "{unscored} frames not scored: no mask of their name in {}",
+            truth.display()
         );
     }
     Ok(())

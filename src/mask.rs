@@ -102,18 +102,32 @@ impl Mask {
             .map(|(x0, y0, x1, y1)| (x0 as u32, y0 as u32, x1 as u32, y1 as u32))
     }
 
-    /// Intersection over union with `other` (same size); 1 when both are empty.
+    /// Intersection over union with `other`; 1 when both are empty.
     pub fn iou(&self, other: &Mask) -> f64 {
         self.agreement(other).iou()
     }
 
-    /// Pixel counts of this mask against a `truth` of the same size.
+    /// Pixel counts of this mask against a `truth`. Masks of two sizes are compared as pictures
+    /// placed at the same top-left corner, a pixel outside one of them counting as not person
+    /// (callers check the sizes where they differ by mistake).
     pub fn agreement(&self, truth: &Mask) -> Agreement {
         let mut counts = Agreement::default();
-        for (&a, &b) in self.pixels.iter().zip(&truth.pixels) {
+        let mut count = |a: bool, b: bool| {
             counts.both += (a && b) as usize;
             counts.missed += (!a && b) as usize;
             counts.extra += (a && !b) as usize;
+        };
+        if self.width == truth.width && self.height == truth.height {
+            for (&a, &b) in self.pixels.iter().zip(&truth.pixels) {
+                count(a, b);
+            }
+        } else {
+            let at = |m: &Mask, x: u32, y: u32| x < m.width && y < m.height && m.get(x, y);
+            for y in 0..self.height.max(truth.height) {
+                for x in 0..self.width.max(truth.width) {
+                    count(at(self, x, y), at(truth, x, y));
+                }
+            }
         }
         counts
     }
@@ -234,8 +248,13 @@ impl Agreement {
 
     /// Shares of the true area missed and added; 0 when the truth is empty.
     pub fn missed_and_extra(&self) -> (f64, f64) {
-        let truth = (self.both + self.missed).max(1) as f64;
-        (self.missed as f64 / truth, self.extra as f64 / truth)
+        match self.both + self.missed {
+            0 => (0.0, 0.0),
+            truth => (
+                self.missed as f64 / truth as f64,
+                self.extra as f64 / truth as f64,
+            ),
+        }
     }
 }
 
@@ -345,6 +364,18 @@ mod tests {
         let a = Mask::from_pixels(4, 4, (0..16).map(|i| i % 4 < 2).collect()).expect("size");
         let b = Mask::from_pixels(4, 4, (0..16).map(|i| i < 8).collect()).expect("size");
         assert!((a.iou(&b) - 4.0 / 12.0).abs() < 1e-12);
+        // Masks of two sizes compare as pictures sharing their top-left corner: a 2x2 crop of a
+        // against a misses a's pixels outside the crop, as a 4x4 mask blank there would.
+        let small = Mask::from_fn(2, 2, |x, y| a.get(x, y));
+        let cropped = small.agreement(&a);
+        let by_hand = Mask::from_fn(4, 4, |x, y| x < 2 && y < 2 && a.get(x, y)).agreement(&a);
+        assert_eq!(cropped, by_hand);
+        assert_eq!(a.agreement(&small).extra, cropped.missed);
+        // Nobody in the truth: no share of it missed or added.
+        assert_eq!(
+            a.agreement(&Mask::empty(4, 4)).missed_and_extra(),
+            (0.0, 0.0)
+        );
         let agreement = a.agreement(&b);
         assert_eq!(
             (agreement.both, agreement.missed, agreement.extra),

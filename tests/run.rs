@@ -344,4 +344,40 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         assert!(stderr.contains(flag), "{stderr}");
         assert!(!out.exists(), "nothing written for a bad setting");
     }
+    // Truth masks of a few frames only (as hand-labelled ones are): those frames are scored.
+    let few = tmp.path().join("labelled");
+    std::fs::create_dir_all(&few).expect("dir");
+    for k in 0..5 {
+        let name = format!("{k:06}.png");
+        std::fs::copy(data.join("masks").join(&name), few.join(&name)).expect("copy");
+    }
+    let labelled = |out: &Path| {
+        suitcap()
+            .args(["segment", "--suit"])
+            .arg(repo("suits/default"))
+            .arg("--input")
+            .arg(data.join("frames"))
+            .arg("--truth")
+            .arg(&few)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .expect("runs")
+    };
+    let report = succeeded(labelled(&tmp.path().join("few")));
+    assert!(
+        report.contains("IoU against") && report.contains("7 frames not scored"),
+        "{report}"
+    );
+    // A truth mask of another size is named, not scored as if it fitted.
+    image::GrayImage::new(10, 10)
+        .save(few.join("000002.png"))
+        .expect("mask");
+    let output = labelled(&tmp.path().join("wrong"));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("000002.png") && stderr.contains("10x10 truth mask"),
+        "{stderr}"
+    );
 }
