@@ -745,6 +745,18 @@ pub fn drape(
                 let Ok(grey) = image::open(&path).map(|i| i.to_luma8()) else {
                     continue;
                 };
+                let calibrated = (camera.intrinsics.width, camera.intrinsics.height);
+                if grey.dimensions() != calibrated {
+                    bail!(
+                        "{}: a {}x{} mask, but {} is calibrated for {}x{} frames",
+                        path.display(),
+                        grey.width(),
+                        grey.height(),
+                        camera_path.display(),
+                        calibrated.0,
+                        calibrated.1
+                    );
+                }
                 estimator.add_frame(
                     Silhouette::whole(&Mask::from_gray(&grey)),
                     &body,
