@@ -618,20 +618,8 @@ fn segment(
             // Only the frames with a truth mask are scored (a few may have been labelled).
             let truth_path = truth.join(&name);
             if truth_path.is_file() {
-                let gt = image::open(&truth_path)
-                    .with_context(|| format!("cannot read {}", truth_path.display()))?
-                    .to_luma8();
-                if gt.dimensions() != frame.image.dimensions() {
-                    bail!(
-                        "{}: a {}x{} truth mask for a {}x{} frame",
-                        truth_path.display(),
-                        gt.width(),
-                        gt.height(),
-                        frame.image.width(),
-                        frame.image.height()
-                    );
-                }
-                scored.push((result.mask.agreement(&Mask::from_gray(&gt)), name.clone()));
+                let gt = read_mask_for(&truth_path, &frame.image, "truth mask")?;
+                scored.push((result.mask.agreement(&gt), name.clone()));
             } else {
                 unscored += 1;
             }
@@ -697,6 +685,25 @@ fn segment(
     Ok(())
 }
 
+/// The mask (8-bit grey, 255 = person) at `path` for `frame`, whose size it must have; `what`
+/// names it in errors ("mask", "truth mask").
+fn read_mask_for(path: &Path, frame: &image::RgbImage, what: &str) -> anyhow::Result<Mask> {
+    let grey = image::open(path)
+        .with_context(|| format!("cannot read {what} {}", path.display()))?
+        .to_luma8();
+    if grey.dimensions() != frame.dimensions() {
+        bail!(
+            "{}: a {}x{} {what} for a {}x{} frame",
+            path.display(),
+            grey.width(),
+            grey.height(),
+            frame.width(),
+            frame.height()
+        );
+    }
+    Ok(Mask::from_gray(&grey))
+}
+
 fn describe(
     suit_dir: &Path,
     input: &str,
@@ -752,14 +759,7 @@ fn describe(
             .and_then(|n| n.get(frame.index as usize).cloned())
             .unwrap_or_else(|| format!("{:06}.png", frame.index));
         let mask = match (masks, segmenter.as_mut()) {
-            (Some(dir), _) => {
-                let path = dir.join(&name);
-                Mask::from_gray(
-                    &image::open(&path)
-                        .with_context(|| format!("cannot read mask {}", path.display()))?
-                        .to_luma8(),
-                )
-            }
+            (Some(dir), _) => read_mask_for(&dir.join(&name), &frame.image, "mask")?,
             (None, Some(segmenter)) => segmenter.segment(&frame.image).mask,
             (None, None) => bail!("no masks and no segmenter"),
         };
