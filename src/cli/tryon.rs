@@ -605,12 +605,15 @@ fn count_frames(input: &str) -> Option<u64> {
 }
 
 fn report(summary: &RunSummary, take: &Take, nobody: usize, timings: &TimingLog) {
+    let filled = match take.held() {
+        0 => String::new(),
+        n => format!(" (their {n} BVH frames filled in from the poses around them)"),
+    };
     println!(
-        "{} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped (their {} BVH frames filled in between the poses around them); {} camera frames dropped; {:.1} s ({:.1} frames/s)",
+        "{} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped{filled}; {} camera frames dropped; {:.1} s ({:.1} frames/s)",
         take.frames(),
         take.path.display(),
         summary.skipped.len(),
-        take.held(),
         summary.dropped,
         summary.seconds,
         summary.frames as f64 / summary.seconds.max(1e-9)
