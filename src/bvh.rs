@@ -34,6 +34,11 @@ pub struct Motion {
     values: Vec<f32>,
 }
 
+/// The largest channel value taken as data: a million degrees is 2,778 turns, a million
+/// centimetres 10 km, beyond any take (and there an `f32` keeps only a sixteenth of a unit).
+/// Larger values are a damaged file, which forward kinematics would turn into noise.
+pub const MAX_CHANNEL_VALUE: f32 = 1.0e6;
+
 /// A BVH file that could not be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum BvhError {
@@ -49,7 +54,7 @@ pub enum BvhError {
         message: String,
     },
     #[error(
-        "{path}: frame {frame}, channel {channel} ({joint} {channel_name}) is not a finite number"
+        "{path}: frame {frame}, channel {channel} ({joint} {channel_name}) is not a finite number, or beyond ±{MAX_CHANNEL_VALUE} (degrees or centimetres)"
     )]
     NotFinite {
         path: PathBuf,
@@ -187,7 +192,7 @@ impl Motion {
                     ),
                 ));
             }
-            if let Some(channel) = slice.iter().position(|v| !v.is_finite()) {
+            if let Some(channel) = slice.iter().position(|v| !(v.abs() <= MAX_CHANNEL_VALUE)) {
                 let (joint, channel_name) = channel_owner(&skeleton, channel);
                 return Err(BvhError::NotFinite {
                     path: path.to_owned(),
@@ -616,6 +621,16 @@ mod tests {
         let nan = TINY.replace("20 2.5e-1", "20 nan");
         let err = Motion::parse(nan.as_bytes(), Path::new("nan.bvh")).unwrap_err();
         assert!(err.to_string().contains("nan.bvh"), "{err}");
+        // A damaged value too large for any angle or position is named like a NaN; a spinning
+        // joint's unwrapped angle is not.
+        for (value, ok) in [("1e30", false), ("-2e6", false), ("3600", true)] {
+            let text = TINY.replace("20 2.5e-1", &format!("20 {value}"));
+            let result = Motion::parse(text.as_bytes(), Path::new("big.bvh"));
+            assert_eq!(result.is_ok(), ok, "{value}");
+            if let Err(err) = result {
+                assert!(matches!(err, BvhError::NotFinite { .. }), "{err}");
+            }
+        }
         let err = Motion::parse(b"not a bvh", Path::new("x.bvh")).unwrap_err();
         assert!(err.to_string().contains("x.bvh"), "{err}");
         let err = Motion::load(Path::new("/nonexistent/clip.bvh")).unwrap_err();
