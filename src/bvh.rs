@@ -192,7 +192,10 @@ impl Motion {
                     ),
                 ));
             }
-            if let Some(channel) = slice.iter().position(|v| !(v.abs() <= MAX_CHANNEL_VALUE)) {
+            if let Some(channel) = slice
+                .iter()
+                .position(|v| !v.is_finite() || v.abs() > MAX_CHANNEL_VALUE)
+            {
                 let (joint, channel_name) = channel_owner(&skeleton, channel);
                 return Err(BvhError::NotFinite {
                     path: path.to_owned(),
