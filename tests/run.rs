@@ -306,14 +306,15 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
 {
     let tmp = tempfile::tempdir().expect("tempdir");
     let data = generated_clip(&tmp.path().join("clip"));
-    let segment = |out: &Path, extra: &[&str]| {
+    let all_masks = data.join("masks");
+    let segment = |out: &Path, truth: &Path, extra: &[&str]| {
         suitcap()
             .args(["segment", "--suit"])
             .arg(repo("suits/default"))
             .arg("--input")
             .arg(data.join("frames"))
             .arg("--truth")
-            .arg(data.join("masks"))
+            .arg(truth)
             .arg("--out")
             .arg(out)
             .args(extra)
@@ -327,7 +328,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         ("marker colours kept", &["--keep-room-share", "2"][..]),
     ] {
         let out = tmp.path().join(name);
-        let report = succeeded(segment(&out, extra));
+        let report = succeeded(segment(&out, &all_masks, extra));
         assert!(report.contains("IoU against"), "{report}");
         let masks = std::fs::read_dir(&out).expect("masks written").count();
         assert_eq!(masks, 12, "{name}");
@@ -338,7 +339,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         (&["--part-colours", "1.5"][..], "--part-colours"),
         (&["--keep-room-share", "NaN"][..], "--keep-room-share"),
     ] {
-        let output = segment(&out, bad);
+        let output = segment(&out, &all_masks, bad);
         assert!(!output.status.success(), "{bad:?}");
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert!(stderr.contains(flag), "{stderr}");
@@ -351,20 +352,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         let name = format!("{k:06}.png");
         std::fs::copy(data.join("masks").join(&name), few.join(&name)).expect("copy");
     }
-    let labelled = |out: &Path| {
-        suitcap()
-            .args(["segment", "--suit"])
-            .arg(repo("suits/default"))
-            .arg("--input")
-            .arg(data.join("frames"))
-            .arg("--truth")
-            .arg(&few)
-            .arg("--out")
-            .arg(out)
-            .output()
-            .expect("runs")
-    };
-    let report = succeeded(labelled(&tmp.path().join("few")));
+    let report = succeeded(segment(&tmp.path().join("few"), &few, &[]));
     assert!(
         report.contains("IoU against") && report.contains("7 frames not scored"),
         "{report}"
@@ -373,7 +361,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
     image::GrayImage::new(10, 10)
         .save(few.join("000002.png"))
         .expect("mask");
-    let output = labelled(&tmp.path().join("wrong"));
+    let output = segment(&tmp.path().join("wrong"), &few, &[]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success(), "{stderr}");
     assert!(
