@@ -1286,7 +1286,8 @@ fn worst_frame(frames: &[FrameError]) -> Option<(usize, f64)> {
 /// One dataset's part of an evaluation: its errors, the sums [`evaluate`] adds up over all, and
 /// the line it prints for it.
 struct DatasetRun {
-    summary: DatasetErrors,
+    /// The dataset's directory as given.
+    name: String,
     angles: JointErrors,
     positions: PositionErrors,
     /// The raw regression through each of the runtime's filters, in [`FILTER_VARIANTS`]' order.
@@ -1347,7 +1348,7 @@ fn evaluate(
         .collect::<anyhow::Result<Vec<DatasetRun>>>()?;
     let names = match runs.first() {
         Some(run) => run.angles.names.clone(),
-        None => PosePipeline::load(suit_dir)?.suit.skeleton.joint_names(),
+        None => SuitDefinition::load_dir(suit_dir)?.skeleton.joint_names(),
     };
     let mut all = JointErrors::new(names.clone());
     let mut all_positions = PositionErrors::new(&names);
@@ -1381,7 +1382,13 @@ fn evaluate(
         marker_depth_frames += run.marker_depth_frames;
         depth_ratio_medians.push(median(&run.depth_ratios));
         depth_ratios_all.extend(run.depth_ratios);
-        per_dataset.push(run.summary);
+        per_dataset.push(DatasetErrors {
+            name: run.name,
+            euler_deg: run.angles.mean_euler(),
+            geodesic_deg: run.angles.mean_geodesic(),
+            position_cm: run.positions.mean_cm(),
+            frames: run.angles.frames,
+        });
         per_frame.extend(run.frames);
     }
     if verbose {
@@ -1450,13 +1457,7 @@ fn evaluate_dataset(
     let dataset = Dataset::open(dir)?;
     let layout = suitcap::pose::PoseLayout::new(&pipeline.suit.skeleton, &dataset.motion.skeleton)?;
     let mut run = DatasetRun {
-        summary: DatasetErrors {
-            name: dir.display().to_string(),
-            euler_deg: 0.0,
-            geodesic_deg: 0.0,
-            position_cm: 0.0,
-            frames: 0,
-        },
+        name: dir.display().to_string(),
         angles: JointErrors::new(names.clone()),
         positions: PositionErrors::new(&names),
         filtered: variants
@@ -1572,10 +1573,6 @@ fn evaluate_dataset(
         run.angles.mean_geodesic(),
         run.positions.mean_cm()
     );
-    run.summary.euler_deg = run.angles.mean_euler();
-    run.summary.geodesic_deg = run.angles.mean_geodesic();
-    run.summary.position_cm = run.positions.mean_cm();
-    run.summary.frames = run.angles.frames;
     Ok(run)
 }
 
