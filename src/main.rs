@@ -691,16 +691,7 @@ fn read_mask_for(path: &Path, frame: &image::RgbImage, what: &str) -> anyhow::Re
     let grey = image::open(path)
         .with_context(|| format!("cannot read {what} {}", path.display()))?
         .to_luma8();
-    if grey.dimensions() != frame.dimensions() {
-        bail!(
-            "{}: a {}x{} {what} for a {}x{} frame",
-            path.display(),
-            grey.width(),
-            grey.height(),
-            frame.width(),
-            frame.height()
-        );
-    }
+    cli::ensure_mask_size(path, grey.dimensions(), frame.dimensions(), what)?;
     Ok(Mask::from_gray(&grey))
 }
 

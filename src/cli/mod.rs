@@ -7,3 +7,23 @@ pub mod tryon;
 pub fn median(values: &[f64]) -> f64 {
     suitcap::stats::median(values).unwrap_or(0.0)
 }
+
+/// Errors unless a mask read from `path` (`size`, width × height) has the frames' `frame_size`;
+/// `what` names it ("mask", "truth mask").
+pub fn ensure_mask_size(
+    path: &std::path::Path,
+    size: (u32, u32),
+    frame_size: (u32, u32),
+    what: &str,
+) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        size == frame_size,
+        "{}: a {}x{} {what} for {}x{} frames",
+        path.display(),
+        size.0,
+        size.1,
+        frame_size.0,
+        frame_size.1
+    );
+    Ok(())
+}

@@ -749,17 +749,7 @@ pub fn drape(
                     continue;
                 };
                 let calibrated = (camera.intrinsics.width, camera.intrinsics.height);
-                if grey.dimensions() != calibrated {
-                    bail!(
-                        "{}: a {}x{} mask, but {} is calibrated for {}x{} frames",
-                        path.display(),
-                        grey.width(),
-                        grey.height(),
-                        camera_path.display(),
-                        calibrated.0,
-                        calibrated.1
-                    );
-                }
+                super::ensure_mask_size(&path, grey.dimensions(), calibrated, "mask")?;
                 estimator.add_frame(
                     Silhouette::whole(&Mask::from_gray(&grey)),
                     &body,
