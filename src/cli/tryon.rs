@@ -220,29 +220,57 @@ impl TimingLog {
     }
 }
 
-/// A BVH take being recorded: one frame per input frame, so that BVH frame k is the pose of
-/// the take's k-th video frame. Input frames that never reached the pose stage (corrupt, or
-/// dropped by a live pipeline that was behind) are filled in between the poses before and after
-/// them (rotations the short way, as the cloth's substeps are), or hold the last pose at the end
-/// of a recording; without them every later BVH frame would be early against the video.
+/// A BVH take being recorded, one BVH frame per frame of its [`TakeClock`]. Frames of the clock
+/// without a pose (input frames that were corrupt or that a live pipeline dropped because it was
+/// behind; on the camera's clock also frames the camera itself dropped, which show only as a gap in
+/// its timestamps) are filled in between the poses before and after them (rotations the short way,
+/// as the cloth's substeps are), or hold the last pose at the end of a recording; without them
+/// every later BVH frame would be early against the video.
 pub struct Take {
     motion: Motion,
     path: PathBuf,
     /// Which channels are rotations, for the filling in.
     rotation: Vec<bool>,
-    /// The input frame the next BVH frame stands for; `None` until the first frame (a live take
-    /// starts at whichever frame is shown when recording starts).
-    next_index: Option<u64>,
-    /// BVH frames filled in for an input frame that had no pose.
+    fps: f64,
+    clock: TakeClock,
+    /// The input frame BVH frame 0 stands for: 0 for a recording; `None` for a live take, which
+    /// starts at whichever frame is shown when recording starts.
+    first_index: Option<u64>,
+    /// The first pose pushed, to which the camera's clock measures every later frame's time.
+    first: Option<Placed>,
+    /// The last pose pushed.
+    last: Option<Placed>,
+    /// BVH frames filled in for frames of the clock without a pose.
     held: usize,
 }
 
+/// What a take's BVH frames count.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TakeClock {
+    /// One BVH frame per input frame (`run`: BVH frame k is the recording's k-th frame, so the
+    /// take lines up with the frame files and the composited frames).
+    InputFrames,
+    /// One BVH frame per 1/fps of the frames' timestamps (`live`: the take keeps the camera's
+    /// time also over frames the camera dropped).
+    CaptureTime,
+}
+
+/// Where a pushed pose went: its input frame, its time in the stream, its BVH frame.
+#[derive(Clone, Copy, Debug)]
+struct Placed {
+    index: u64,
+    time_s: f64,
+    slot: u64,
+}
+
 impl Take {
-    /// A take at `fps` on `skeleton`, written to `path`; its first BVH frame stands for input
-    /// frame `first_index` (0 for a recording) or, with `None`, for the first frame pushed.
+    /// A take at `fps` on `skeleton` counting `clock`'s frames, written to `path`; its first BVH
+    /// frame stands for input frame `first_index` (0 for a recording) or, with `None`, for the
+    /// first frame pushed.
     pub fn new(
         skeleton: &suitcap::skeleton::Skeleton,
         fps: f64,
+        clock: TakeClock,
         path: PathBuf,
         first_index: Option<u64>,
     ) -> anyhow::Result<Take> {
@@ -250,17 +278,47 @@ impl Take {
             motion: Motion::new(skeleton.clone(), 1.0 / fps, Vec::new())?,
             path,
             rotation: skeleton.rotation_channels(),
-            next_index: first_index,
+            fps,
+            clock,
+            first_index,
+            first: None,
+            last: None,
             held: 0,
         })
     }
 
-    /// Records the pose of input frame `index`, first filling in the input frames between the
-    /// last one pushed and it (between the two poses; before the first pose, with this one).
-    pub fn push(&mut self, index: u64, frame: &[f32]) -> anyhow::Result<()> {
-        self.fill_until(index, frame)?;
+    /// The BVH frame for input frame `index` shown at `time_s` into the stream. The first pose
+    /// goes to its input frame's place (input frames before it were lost). On the input frames'
+    /// clock every later one does too; on the camera's it goes to its time's place after the
+    /// first pose, and at least one after the pose before it (a camera running a little faster
+    /// than its rate must not overwrite poses).
+    fn slot_for(&self, index: u64, time_s: f64) -> u64 {
+        match (self.clock, self.first, self.last) {
+            (TakeClock::CaptureTime, Some(first), Some(last)) => {
+                let elapsed = ((time_s - first.time_s) * self.fps).round().max(0.0);
+                (first.slot + elapsed as u64).max(last.slot + 1)
+            }
+            (TakeClock::InputFrames, Some(first), _) => {
+                first.slot + index.saturating_sub(first.index)
+            }
+            _ => index.saturating_sub(self.first_index.unwrap_or(index)),
+        }
+    }
+
+    /// Records the pose of input frame `index`, shown at `time_s` into the stream, first filling
+    /// in the clock's frames between the last pose pushed and it (between the two poses; before the
+    /// first pose, with this one).
+    pub fn push(&mut self, index: u64, time_s: f64, frame: &[f32]) -> anyhow::Result<()> {
+        let slot = self.slot_for(index, time_s);
+        self.fill_until(slot, frame)?;
         self.motion.push_frame(frame)?;
-        self.next_index = self.next_index.map(|next| next.max(index + 1));
+        let placed = Placed {
+            index,
+            time_s,
+            slot,
+        };
+        self.first.get_or_insert(placed);
+        self.last = Some(placed);
         Ok(())
     }
 
@@ -268,21 +326,20 @@ impl Take {
     /// `input_frames` (the frames a recording ended with that never reached the pose stage).
     /// Nothing to hold before the first pose.
     pub fn hold_to_end(&mut self, input_frames: u64) -> anyhow::Result<()> {
-        match self.motion.frame_count() {
-            0 => Ok(()),
-            n => {
-                let last = self.motion.frame(n - 1).to_vec();
-                self.fill_until(input_frames, &last)
-            }
-        }
+        let Some(last) = self.last else {
+            return Ok(());
+        };
+        let after = input_frames.saturating_sub(last.index + 1);
+        let pose = self.motion.frame(self.motion.frame_count() - 1).to_vec();
+        self.fill_until(last.slot + 1 + after, &pose)
     }
 
-    /// Fills the input frames from the next expected one up to `index` (exclusive): from the
-    /// last pose towards `next`, the pose of frame `index` (the last pose throughout when `next`
-    /// is that pose; `next` throughout before the first pose).
-    fn fill_until(&mut self, index: u64, next: &[f32]) -> anyhow::Result<()> {
-        let expected = *self.next_index.get_or_insert(index);
-        let missing = index.saturating_sub(expected);
+    /// Fills the BVH frames from the next one up to `slot` (exclusive): from the last pose
+    /// towards `next`, the pose of BVH frame `slot` (the last pose throughout when `next` is that
+    /// pose; `next` throughout before the first pose).
+    fn fill_until(&mut self, slot: u64, next: &[f32]) -> anyhow::Result<()> {
+        let filled_to = self.motion.frame_count() as u64;
+        let missing = slot.saturating_sub(filled_to);
         if missing == 0 {
             return Ok(());
         }
@@ -297,7 +354,6 @@ impl Take {
             self.motion.push_frame(&filled)?;
         }
         self.held += missing as usize;
-        self.next_index = Some(index);
         Ok(())
     }
 
@@ -305,7 +361,7 @@ impl Take {
         self.motion.frame_count()
     }
 
-    /// BVH frames filled in for input frames that never reached the pose stage.
+    /// BVH frames filled in for frames of the clock without a pose.
     pub fn held(&self) -> usize {
         self.held
     }
@@ -314,7 +370,7 @@ impl Take {
     /// stage.
     fn recorded_line(&self, path: &Path) -> String {
         format!(
-            "recorded {} frames → {} ({} of them filled in between the poses around them, for frames the pipeline dropped or that were corrupt, so the take keeps the camera's time)",
+            "recorded {} frames → {} ({} of them filled in between the poses around them, for frames that were corrupt or that the pipeline or the camera dropped, so the take keeps the camera's time)",
             self.frames(),
             path.display(),
             self.held
@@ -500,7 +556,13 @@ pub fn run(
     drop(probe);
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let template = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
-    let mut take = Take::new(&template, fps, out.join("take.bvh"), Some(0))?;
+    let mut take = Take::new(
+        &template,
+        fps,
+        TakeClock::InputFrames,
+        out.join("take.bvh"),
+        Some(0),
+    )?;
     let mut outputs = RunOutputs::new(out, fps)?;
     let controls = Controls::new(parse_overlays(&garment.overlays)?);
     stop_on_signals(&controls);
@@ -544,7 +606,7 @@ pub fn run(
                 bar.suspend(|| eprintln!("{line}"));
             }
             let result = take
-                .push(output.index, &output.pose.frame)
+                .push(output.index, output.timestamp_s, &output.pose.frame)
                 .and_then(|()| outputs.add(&output));
             bar.inc(1);
             match result {
@@ -971,6 +1033,7 @@ pub fn live(
         Some(path) => Some(Take::new(
             &template_pipeline_skeleton,
             rate,
+            TakeClock::CaptureTime,
             path.clone(),
             Some(0),
         )?),
@@ -1022,7 +1085,7 @@ pub fn live(
                 eprintln!("{line}");
             }
             if let Some(take) = &mut recording {
-                if let Err(e) = take.push(output.index, &output.pose.frame) {
+                if let Err(e) = take.push(output.index, output.timestamp_s, &output.pose.frame) {
                     failure = Some(e);
                     return false;
                 }
@@ -1065,7 +1128,13 @@ pub fn live(
                         },
                         None => {
                             let path = numbered(&base, takes_written.len());
-                            match Take::new(&template_pipeline_skeleton, rate, path, None) {
+                            match Take::new(
+                                &template_pipeline_skeleton,
+                                rate,
+                                TakeClock::CaptureTime,
+                                path,
+                                None,
+                            ) {
                                 Ok(take) => recording = Some(take),
                                 Err(e) => eprintln!(
                                     "cannot start recording: {}",
@@ -1163,7 +1232,7 @@ mod tests {
     }
 
     #[test]
-    fn a_take_fills_in_missing_input_frames() {
+    fn a_take_fills_in_frame_times_without_a_pose() {
         use suitcap::skeleton::{Channel, Joint, Skeleton};
         let skeleton = Skeleton::new(vec![Joint {
             name: "hip".into(),
@@ -1183,9 +1252,17 @@ mod tests {
         .unwrap();
         let frame = |k: u64| [k as f32; 6];
         // A recording: input frames 0 and 3 never arrived, nor 6 and 7 at the end.
-        let mut take = Take::new(&skeleton, 30.0, PathBuf::from("take.bvh"), Some(0)).unwrap();
+        let mut take = Take::new(
+            &skeleton,
+            30.0,
+            TakeClock::InputFrames,
+            PathBuf::from("take.bvh"),
+            Some(0),
+        )
+        .unwrap();
+        let at_rate = |k: u64| k as f64 / 30.0;
         for k in [1, 2, 4, 5] {
-            take.push(k, &frame(k)).unwrap();
+            take.push(k, at_rate(k), &frame(k)).unwrap();
         }
         take.hold_to_end(8).unwrap();
         // Frame 0 takes the first pose; 3 lies between 2 and 4; 6 and 7 hold the last.
@@ -1193,19 +1270,86 @@ mod tests {
         assert_eq!((take.frames(), take.held()), (8, 4));
         // A live take starts at the first frame pushed; frames 12 and 13 were dropped. The root's
         // Z rotation (channel 3) goes from 11 to 14 the short way; so it does from 170° to −170°.
-        let mut live = Take::new(&skeleton, 30.0, PathBuf::from("take.bvh"), None).unwrap();
+        let mut live = Take::new(
+            &skeleton,
+            30.0,
+            TakeClock::CaptureTime,
+            PathBuf::from("take.bvh"),
+            None,
+        )
+        .unwrap();
         for k in [10, 11, 14] {
-            live.push(k, &frame(k)).unwrap();
+            live.push(k, at_rate(k), &frame(k)).unwrap();
         }
         assert_eq!(firsts(&live), [10.0, 11.0, 12.0, 13.0, 14.0]);
         assert_eq!(live.held(), 2);
-        let mut turn = Take::new(&skeleton, 30.0, PathBuf::from("take.bvh"), Some(0)).unwrap();
-        turn.push(0, &[0.0, 0.0, 0.0, 170.0, 0.0, 0.0]).unwrap();
-        turn.push(2, &[0.0, 0.0, 0.0, -170.0, 0.0, 0.0]).unwrap();
+        let mut turn = Take::new(
+            &skeleton,
+            30.0,
+            TakeClock::InputFrames,
+            PathBuf::from("take.bvh"),
+            Some(0),
+        )
+        .unwrap();
+        turn.push(0, 0.0, &[0.0, 0.0, 0.0, 170.0, 0.0, 0.0])
+            .unwrap();
+        turn.push(2, at_rate(2), &[0.0, 0.0, 0.0, -170.0, 0.0, 0.0])
+            .unwrap();
         let middle = turn.motion.frame(1)[3];
         assert!((middle.abs() - 180.0).abs() < 1e-4, "{middle}");
+        // A camera that dropped the frame at 100 ms: the frames after it are numbered densely,
+        // their timestamps are not. On the camera's clock the frame after the gap goes to its
+        // time's place, and the hold over a trailing corrupt frame 4 follows it; on the input
+        // frames' clock (`run`) each input frame has its BVH frame.
+        let times = [(0, 0.0), (1, 34.0), (2, 66.0), (3, 134.0)];
+        let mut camera = Take::new(
+            &skeleton,
+            30.0,
+            TakeClock::CaptureTime,
+            PathBuf::from("take.bvh"),
+            Some(0),
+        )
+        .unwrap();
+        let mut files = Take::new(
+            &skeleton,
+            30.0,
+            TakeClock::InputFrames,
+            PathBuf::from("take.bvh"),
+            Some(0),
+        )
+        .unwrap();
+        for (k, ms) in times {
+            camera.push(k, ms / 1000.0, &frame(k)).unwrap();
+            files.push(k, ms / 1000.0, &frame(k)).unwrap();
+        }
+        camera.hold_to_end(5).unwrap();
+        files.hold_to_end(5).unwrap();
+        assert_eq!(firsts(&camera), [0.0, 1.0, 2.0, 2.5, 3.0, 3.0]);
+        assert_eq!(camera.held(), 2);
+        assert_eq!(firsts(&files), [0.0, 1.0, 2.0, 3.0, 3.0]);
+        assert_eq!(files.held(), 1);
+        // A camera a little faster than its rate: no pose overwrites another, none is doubled.
+        let mut fast = Take::new(
+            &skeleton,
+            30.0,
+            TakeClock::CaptureTime,
+            PathBuf::from("take.bvh"),
+            None,
+        )
+        .unwrap();
+        for k in 0..4 {
+            fast.push(k, k as f64 * 0.031, &frame(k)).unwrap();
+        }
+        assert_eq!((firsts(&fast), fast.held()), (vec![0.0, 1.0, 2.0, 3.0], 0));
         // Nothing to hold before a first pose.
-        let mut empty = Take::new(&skeleton, 30.0, PathBuf::from("take.bvh"), Some(0)).unwrap();
+        let mut empty = Take::new(
+            &skeleton,
+            30.0,
+            TakeClock::InputFrames,
+            PathBuf::from("take.bvh"),
+            Some(0),
+        )
+        .unwrap();
         empty.hold_to_end(5).unwrap();
         assert_eq!(empty.frames(), 0);
     }
