@@ -139,37 +139,46 @@ fn pose_stage(suit_dir: &Path, args: &PoseArgs) -> anyhow::Result<PoseStage> {
     })
 }
 
-/// The camera of an input: `--camera`, else camera.toml beside the input, else in the suit.
-pub fn camera_for(
+/// The camera calibration of an input: `--camera`, else camera.toml beside the input, else in
+/// the suit; `None` when there is none. A calibration file that is there but cannot be read is
+/// an error naming it, never passed over for an assumed camera.
+pub fn find_camera(
     input: &str,
     suit_dir: &Path,
     camera: Option<&PathBuf>,
-) -> anyhow::Result<Camera> {
+) -> anyhow::Result<Option<Camera>> {
     let path = match camera {
-        Some(path) => path.clone(),
+        Some(path) => Some(path.clone()),
         None => {
             let input = Path::new(input);
-            let beside = [
+            [
                 input.join("camera.toml"),
                 input.with_file_name("camera.toml"),
-            ];
-            match beside.into_iter().find(|p| p.is_file()) {
-                Some(p) => p,
-                None => {
-                    let in_suit = suit_dir.join("camera.toml");
-                    if !in_suit.is_file() {
-                        anyhow::bail!(
-                            "no camera calibration for {}: give --camera, or put camera.toml beside the input or in {}",
-                            input.display(),
-                            suit_dir.display()
-                        );
-                    }
-                    in_suit
-                }
-            }
+                suit_dir.join("camera.toml"),
+            ]
+            .into_iter()
+            .find(|p| p.is_file())
         }
     };
-    Ok(Camera::load(&path)?)
+    Ok(path.map(|path| Camera::load(&path)).transpose()?)
+}
+
+/// The input's calibration ([`find_camera`]), else a typical webcam at the input's `size`
+/// ([`default_webcam`]), saying so: the joint angles do not need the camera, only the root's
+/// place in the room does.
+fn camera_or_webcam(
+    input: &str,
+    suit_dir: &Path,
+    camera: Option<Camera>,
+    size: (u32, u32),
+) -> Camera {
+    camera.unwrap_or_else(|| {
+        println!(
+            "no camera calibration for {input} (--camera, or camera.toml beside it or in {}): assuming a webcam with a 60° horizontal field of view, level, 1.2 m above the floor, the person about 3.5 m away; the joint angles do not depend on it, the root's position does",
+            suit_dir.display()
+        );
+        default_webcam(size)
+    })
 }
 
 /// Lets Ctrl-C and SIGTERM stop the capture so the take is finalised.
@@ -526,7 +535,7 @@ pub fn run(
     if !Path::new(input).exists() {
         anyhow::bail!("{input}: no such frame directory or .y4m file");
     }
-    let camera = camera_for(input, suit_dir, camera)?;
+    let calibrated = find_camera(input, suit_dir, camera)?;
     let pose_stage = pose_stage(suit_dir, pose)?;
     let mode = if garment.live_cloth {
         SimulationMode::Live
@@ -542,6 +551,7 @@ pub fn run(
     // Open once here to check the size and learn the rate; the capture thread opens its own.
     let probe = open_source(input, &SourceOptions::default())?;
     let size = probe.size();
+    let camera = camera_or_webcam(input, suit_dir, calibrated, size);
     if size != (camera.intrinsics.width, camera.intrinsics.height) {
         bail!(
             "{input} is {}x{}, but the camera is calibrated for {}x{}",
@@ -970,11 +980,7 @@ pub fn live(
 ) -> anyhow::Result<()> {
     use minifb::{Key, KeyRepeat, Window, WindowOptions};
     // A calibration given, beside a recorded input, or in the suit; else a typical webcam.
-    let calibrated = match camera_for(device, suit_dir, camera) {
-        Ok(c) => Some(c),
-        Err(e) if camera.is_some() => return Err(e),
-        Err(_) => None,
-    };
+    let calibrated = find_camera(device, suit_dir, camera)?;
     let options = SourceOptions {
         size: size.or(calibrated.map(|c| (c.intrinsics.width, c.intrinsics.height))),
         fps,
@@ -985,16 +991,7 @@ pub fn live(
     let rate = probe.frame_rate().unwrap_or(30.0);
     let described = probe.describe();
     drop(probe);
-    let camera = match calibrated {
-        Some(c) => c,
-        None => {
-            println!(
-                "no camera calibration (--camera, or camera.toml in {}): assuming a webcam with a 60° horizontal field of view, level, 1.2 m above the floor, the person about 3.5 m away",
-                suit_dir.display()
-            );
-            default_webcam(actual)
-        }
-    };
+    let camera = camera_or_webcam(device, suit_dir, calibrated, actual);
     if actual != (camera.intrinsics.width, camera.intrinsics.height) {
         bail!(
             "{device} gives {}x{} frames, but the camera calibration is for {}x{}: pass --camera with a calibration at the camera's size",
@@ -1224,6 +1221,36 @@ mod tests {
         assert!(failures.note(11, "other").is_some());
         assert!(failures.note(12, a).is_some());
         assert_eq!(failures.frames, 4);
+    }
+
+    #[test]
+    fn a_calibration_is_found_beside_the_input_and_a_broken_one_is_an_error() {
+        let tmp = tempfile::tempdir().unwrap();
+        let (input, suit) = (tmp.path().join("frames"), tmp.path().join("suit"));
+        std::fs::create_dir_all(&input).unwrap();
+        std::fs::create_dir_all(&suit).unwrap();
+        let name = input.to_str().unwrap();
+        // None anywhere: no calibration, so `run` and `live` assume a webcam.
+        assert!(find_camera(name, &suit, None).unwrap().is_none());
+        let demo =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default/demo/640x480/camera.toml");
+        std::fs::copy(&demo, input.join("camera.toml")).unwrap();
+        let found = find_camera(name, &suit, None).unwrap().unwrap();
+        assert_eq!(
+            (found.intrinsics.width, found.intrinsics.height),
+            (640, 480)
+        );
+        assert_eq!(
+            camera_or_webcam(name, &suit, None, (320, 240))
+                .intrinsics
+                .width,
+            320
+        );
+        // A broken file beside the input is not passed over for the suit's or a webcam.
+        std::fs::write(input.join("camera.toml"), "garbage").unwrap();
+        std::fs::copy(&demo, suit.join("camera.toml")).unwrap();
+        let error = find_camera(name, &suit, None).unwrap_err().to_string();
+        assert!(error.contains("camera.toml"), "{error}");
     }
 
     /// The take's frames as their first channel (each test frame is `[k; 6]`).
