@@ -445,7 +445,7 @@ fn check(suit: &Path, data: Option<&Path>) -> anyhow::Result<()> {
             );
         }
         println!(
-            "dataset {}: {} frames {}x{} at {} fps, subject '{}', clip {}",
+            "dataset {}: {} frames {}x{} at {:.3} fps, subject '{}', clip {}",
             data.display(),
             dataset.frame_count(),
             dataset.manifest.width,
