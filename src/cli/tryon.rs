@@ -1278,15 +1278,18 @@ mod tests {
         }])
         .unwrap();
         let frame = |k: u64| [k as f32; 6];
+        let take_on = |clock, first_index| {
+            Take::new(
+                &skeleton,
+                30.0,
+                clock,
+                PathBuf::from("take.bvh"),
+                first_index,
+            )
+            .unwrap()
+        };
         // A recording: input frames 0 and 3 never arrived, nor 6 and 7 at the end.
-        let mut take = Take::new(
-            &skeleton,
-            30.0,
-            TakeClock::InputFrames,
-            PathBuf::from("take.bvh"),
-            Some(0),
-        )
-        .unwrap();
+        let mut take = take_on(TakeClock::InputFrames, Some(0));
         let at_rate = |k: u64| k as f64 / 30.0;
         for k in [1, 2, 4, 5] {
             take.push(k, at_rate(k), &frame(k)).unwrap();
@@ -1297,27 +1300,13 @@ mod tests {
         assert_eq!((take.frames(), take.held()), (8, 4));
         // A live take starts at the first frame pushed; frames 12 and 13 were dropped. The root's
         // Z rotation (channel 3) goes from 11 to 14 the short way; so it does from 170° to −170°.
-        let mut live = Take::new(
-            &skeleton,
-            30.0,
-            TakeClock::CaptureTime,
-            PathBuf::from("take.bvh"),
-            None,
-        )
-        .unwrap();
+        let mut live = take_on(TakeClock::CaptureTime, None);
         for k in [10, 11, 14] {
             live.push(k, at_rate(k), &frame(k)).unwrap();
         }
         assert_eq!(firsts(&live), [10.0, 11.0, 12.0, 13.0, 14.0]);
         assert_eq!(live.held(), 2);
-        let mut turn = Take::new(
-            &skeleton,
-            30.0,
-            TakeClock::InputFrames,
-            PathBuf::from("take.bvh"),
-            Some(0),
-        )
-        .unwrap();
+        let mut turn = take_on(TakeClock::InputFrames, Some(0));
         turn.push(0, 0.0, &[0.0, 0.0, 0.0, 170.0, 0.0, 0.0])
             .unwrap();
         turn.push(2, at_rate(2), &[0.0, 0.0, 0.0, -170.0, 0.0, 0.0])
@@ -1329,22 +1318,8 @@ mod tests {
         // time's place, and the hold over a trailing corrupt frame 4 follows it; on the input
         // frames' clock (`run`) each input frame has its BVH frame.
         let times = [(0, 0.0), (1, 34.0), (2, 66.0), (3, 134.0)];
-        let mut camera = Take::new(
-            &skeleton,
-            30.0,
-            TakeClock::CaptureTime,
-            PathBuf::from("take.bvh"),
-            Some(0),
-        )
-        .unwrap();
-        let mut files = Take::new(
-            &skeleton,
-            30.0,
-            TakeClock::InputFrames,
-            PathBuf::from("take.bvh"),
-            Some(0),
-        )
-        .unwrap();
+        let mut camera = take_on(TakeClock::CaptureTime, Some(0));
+        let mut files = take_on(TakeClock::InputFrames, Some(0));
         for (k, ms) in times {
             camera.push(k, ms / 1000.0, &frame(k)).unwrap();
             files.push(k, ms / 1000.0, &frame(k)).unwrap();
@@ -1356,27 +1331,13 @@ mod tests {
         assert_eq!(firsts(&files), [0.0, 1.0, 2.0, 3.0, 3.0]);
         assert_eq!(files.held(), 1);
         // A camera a little faster than its rate: no pose overwrites another, none is doubled.
-        let mut fast = Take::new(
-            &skeleton,
-            30.0,
-            TakeClock::CaptureTime,
-            PathBuf::from("take.bvh"),
-            None,
-        )
-        .unwrap();
+        let mut fast = take_on(TakeClock::CaptureTime, None);
         for k in 0..4 {
             fast.push(k, k as f64 * 0.031, &frame(k)).unwrap();
         }
         assert_eq!((firsts(&fast), fast.held()), (vec![0.0, 1.0, 2.0, 3.0], 0));
         // Nothing to hold before a first pose.
-        let mut empty = Take::new(
-            &skeleton,
-            30.0,
-            TakeClock::InputFrames,
-            PathBuf::from("take.bvh"),
-            Some(0),
-        )
-        .unwrap();
+        let mut empty = take_on(TakeClock::InputFrames, Some(0));
         empty.hold_to_end(5).unwrap();
         assert_eq!(empty.frames(), 0);
     }
