@@ -715,6 +715,26 @@ fn held_back(clip: usize, clips: usize, frame: usize) -> bool {
     }
 }
 
+/// What a training set too small to trust lacks, if anything: motions to hold back (with fewer
+/// than five clips the kernel width is chosen on every tenth frame of the training motions
+/// themselves, nearly the same poses as their neighbours, so the held-back error says little about
+/// a motion the suit has not seen) and frames for the basis functions asked for.
+fn training_size_warning(frames: usize, clips: usize, basis: usize) -> Option<String> {
+    let mut lacks = Vec::new();
+    if clips < 5 {
+        lacks.push(format!(
+            "{clips} distinct motion{}: the kernel width is chosen on every tenth frame of the same motions, so the held-back error below says little about motions the suit has not seen (five or more motions hold whole ones back; the default suit has 27)",
+            if clips == 1 { "" } else { "s" }
+        ));
+    }
+    if frames < basis {
+        lacks.push(format!(
+            "{frames} frames for {basis} basis functions: every frame is a candidate"
+        ));
+    }
+    (!lacks.is_empty()).then(|| lacks.join("; "))
+}
+
 /// For each dataset, the index of its source clip (the manifest's `clip.name`) in the order the
 /// clips first appear, and the number of distinct clips: two renderings of one motion (another
 /// subject, camera or room) are one motion, held back together or not at all.
@@ -742,6 +762,8 @@ struct TrainingData {
     dim: usize,
     /// The pose vectors' layout (the first dataset's skeleton and the chosen rotation encoding).
     layout: PoseLayout,
+    /// Distinct motion clips among the datasets ([`clip_indices`]).
+    clips: usize,
 }
 
 impl TrainingData {
@@ -765,6 +787,11 @@ impl TrainingData {
         let layout = PoseLayout::new(&suit.skeleton, &first.motion.skeleton)
             .with_context(|| format!("{}: motion.bvh", first.root.display()))?
             .with_rotations(rotations);
+        let names: Vec<&str> = datasets
+            .iter()
+            .map(|d| d.manifest.clip.name.as_str())
+            .collect();
+        let (clip_of, clips) = clip_indices(&names);
         let mut sets: Vec<TrainingData> = kinds
             .iter()
             .map(|kind| TrainingData {
@@ -774,13 +801,9 @@ impl TrainingData {
                 held_y: Vec::new(),
                 dim: kind.len(),
                 layout: layout.clone(),
+                clips,
             })
             .collect();
-        let names: Vec<&str> = datasets
-            .iter()
-            .map(|d| d.manifest.clip.name.as_str())
-            .collect();
-        let (clip_of, clips) = clip_indices(&names);
         let bar = progress_bar(
             datasets.len(),
             "training descriptors: datasets {pos}/{len} [{elapsed}, {eta} left]",
@@ -1033,6 +1056,9 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
     let set = TrainingData::collect(&suit, &codebooks, data, &[kind], tables.as_ref(), rotations)?
         .remove(0);
     let total = set.frames();
+    if let Some(warning) = training_size_warning(total, set.clips, basis) {
+        eprintln!("warning: {warning}");
+    }
     let width = match width {
         Some(w) => w,
         None => set.choose_width(basis, seed)?,
@@ -1914,7 +1940,8 @@ fn main() -> ExitCode {
 #[cfg(test)]
 mod tests {
     use super::{
-        clip_indices, frames_csv, held_back, training_set, validation_run, worst_frame, FrameError,
+        clip_indices, frames_csv, held_back, training_set, training_size_warning, validation_run,
+        worst_frame, FrameError,
     };
     use std::path::{Path, PathBuf};
     use suitcap::descriptor::{Codebooks, DescriptorKind};
@@ -2047,6 +2074,19 @@ mod tests {
         assert_eq!(indices, vec![0, 1, 0, 2]);
         assert_eq!(clips, 3);
         assert_eq!(clip_indices(&[]), (vec![], 0));
+    }
+
+    #[test]
+    fn a_small_training_set_is_named_for_what_it_lacks() {
+        assert_eq!(training_size_warning(26_372, 27, 1500), None);
+        let one = training_size_warning(12, 1, 1500).unwrap();
+        assert!(one.starts_with("1 distinct motion:"), "{one}");
+        assert!(one.ends_with("12 frames for 1500 basis functions: every frame is a candidate"));
+        let few = training_size_warning(6_000, 4, 1500).unwrap();
+        assert!(
+            few.starts_with("4 distinct motions:") && !few.contains("basis"),
+            "{few}"
+        );
     }
 
     #[test]
