@@ -172,6 +172,10 @@ pub enum DatasetError {
         "{path}: missing; the dataset is incomplete (the generator writes manifest.toml last)"
     )]
     Incomplete { path: PathBuf },
+    #[error(
+        "{dir}: not a dataset (no manifest.toml, no frames/): make one from a recording and its mocap with `suitcap-train import`, or render one with `suitcap-synth`"
+    )]
+    NotADataset { dir: PathBuf },
     #[error("{path}: {message}")]
     Manifest { path: PathBuf, message: String },
     #[error(transparent)]
@@ -431,6 +435,11 @@ pub struct Dataset {
 impl Dataset {
     /// Opens a dataset directory: the manifest must exist and match the motion, camera and frames.
     pub fn open(root: &Path) -> Result<Dataset, DatasetError> {
+        if !root.join("manifest.toml").exists() && !root.join("frames").is_dir() {
+            return Err(DatasetError::NotADataset {
+                dir: root.to_path_buf(),
+            });
+        }
         let manifest = Manifest::load(&root.join("manifest.toml"))?;
         let motion = Motion::load(&root.join("motion.bvh"))?;
         let camera = Camera::load(&root.join("camera.toml"))?;
@@ -572,6 +581,12 @@ mod tests {
     #[test]
     fn a_directory_without_manifest_is_incomplete() {
         let dir = tempfile::tempdir().expect("tempdir");
+        // Neither manifest.toml nor frames/ (an empty directory, or a capture's frames): not a dataset.
+        let err = Dataset::open(dir.path()).unwrap_err();
+        assert!(matches!(err, DatasetError::NotADataset { .. }), "{err}");
+        assert!(err.to_string().contains("suitcap-train import"), "{err}");
+        // With frames/ but no manifest it is one the generator did not finish.
+        std::fs::create_dir(dir.path().join("frames")).expect("mkdir");
         let err = Dataset::open(dir.path()).unwrap_err();
         assert!(matches!(err, DatasetError::Incomplete { .. }), "{err}");
         assert!(err.to_string().contains("manifest.toml"));
