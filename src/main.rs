@@ -151,7 +151,8 @@ enum Command {
         truth_markers: Option<PathBuf>,
     },
     /// The whole pipeline on a recording (frame directory or Y4M): pose, garment, compositing.
-    /// Writes OUT/take.bvh (one BVH frame per input frame, on the suit's skeleton), the composited
+    /// Writes OUT/take.bvh (one BVH frame per input frame, or with --camera-time per 1/fps of the
+    /// input's timestamps; on the suit's skeleton), the composited
     /// frames OUT/frames/, OUT/preview.gif and OUT/frames.csv (per frame: person seen, markers,
     /// milliseconds).
     Run {
@@ -165,6 +166,11 @@ enum Command {
         /// else a level 60° webcam 1.2 m high is assumed (the joint angles do not depend on it).
         #[arg(long)]
         camera: Option<PathBuf>,
+        /// Place the take's frames by the input's timestamps (a capture's timestamps.csv) instead
+        /// of one BVH frame per input frame: frames the camera dropped are filled in, so the take
+        /// keeps the capture's time (as `live` does) and no longer lines up file by file.
+        #[arg(long)]
+        camera_time: bool,
         #[command(flatten)]
         garment: cli::tryon::GarmentArgs,
         #[command(flatten)]
@@ -855,9 +861,17 @@ fn main() -> ExitCode {
             suit,
             out,
             camera,
+            camera_time,
             garment,
             pose,
-        } => cli::tryon::run(input, suit, out, camera.as_ref(), garment, pose),
+        } => {
+            let clock = if *camera_time {
+                cli::tryon::TakeClock::CaptureTime
+            } else {
+                cli::tryon::TakeClock::InputFrames
+            };
+            cli::tryon::run(input, suit, out, camera.as_ref(), clock, garment, pose)
+        }
         Command::Live {
             device,
             suit,

@@ -89,6 +89,50 @@ fn run_writes_one_bvh_frame_per_input_frame() {
         "mean error {:.1}°",
         errors.mean_euler()
     );
+
+    // The same clip as `suitcap capture` writes it when the camera dropped frame 5: the files
+    // numbered densely, the gap only in `timestamps.csv`. By default the take has one BVH frame
+    // per input frame (11); on the capture's time (`--camera-time`) one per 1/30 s, frame 5
+    // filled in (12).
+    let captured = tmp.path().join("captured");
+    std::fs::create_dir_all(&captured).expect("mkdir");
+    let mut times = String::from("file,seconds\n");
+    for (written, k) in (0..12).filter(|&k| k != 5).enumerate() {
+        let name = format!("{written:06}.png");
+        std::fs::copy(
+            data.join(format!("frames/{k:06}.png")),
+            captured.join(&name),
+        )
+        .expect("copy");
+        times += &format!("{name},{:.6}\n", k as f64 / 30.0);
+    }
+    std::fs::write(captured.join("timestamps.csv"), times).expect("timestamps");
+    for (extra, frames) in [(None, 11), (Some("--camera-time"), 12)] {
+        let out = tmp.path().join(format!("out_captured_{frames}"));
+        let printed = succeeded(
+            suitcap()
+                .args(["run"])
+                .arg(&captured)
+                .args([
+                    "--suit",
+                    repo("suits/default").to_str().expect("utf-8 path"),
+                    "--camera",
+                ])
+                .arg(data.join("camera.toml"))
+                .arg("--out")
+                .arg(&out)
+                .args(extra)
+                .output()
+                .expect("runs"),
+        );
+        let take = suitcap::bvh::Motion::load(&out.join("take.bvh")).expect("a valid BVH");
+        assert_eq!(take.frame_count(), frames, "{printed}");
+        assert_eq!(
+            printed.contains("; 1 BVH frames filled in"),
+            frames == 12,
+            "{printed}"
+        );
+    }
 }
 
 #[test]

@@ -523,12 +523,13 @@ pub fn write_png(image: &RgbImage, path: &Path) -> anyhow::Result<()> {
 
 use image::ImageEncoder;
 
-/// `suitcap run`: the whole pipeline on a recorded input.
+/// `suitcap run`: the whole pipeline on a recorded input, its take on `clock`.
 pub fn run(
     input: &str,
     suit_dir: &Path,
     out: &Path,
     camera: Option<&PathBuf>,
+    clock: TakeClock,
     garment: &GarmentArgs,
     pose: &PoseArgs,
 ) -> anyhow::Result<()> {
@@ -566,13 +567,7 @@ pub fn run(
     drop(probe);
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let template = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
-    let mut take = Take::new(
-        &template,
-        fps,
-        TakeClock::InputFrames,
-        out.join("take.bvh"),
-        Some(0),
-    )?;
+    let mut take = Take::new(&template, fps, clock, out.join("take.bvh"), Some(0))?;
     let mut outputs = RunOutputs::new(out, fps)?;
     let controls = Controls::new(parse_overlays(&garment.overlays)?);
     stop_on_signals(&controls);
@@ -679,10 +674,10 @@ fn count_frames(input: &str) -> Option<u64> {
 fn report(summary: &RunSummary, take: &Take, nobody: usize, timings: &TimingLog) {
     let filled = match take.held() {
         0 => String::new(),
-        n => format!(" (their {n} BVH frames filled in from the poses around them)"),
+        n => format!("; {n} BVH frames filled in between the poses around them"),
     };
     println!(
-        "{} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped{filled}; {} camera frames dropped; {:.1} s ({:.1} frames/s)",
+        "{} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped; {} camera frames dropped{filled}; {:.1} s ({:.1} frames/s)",
         take.frames(),
         take.path.display(),
         summary.skipped.len(),
@@ -740,7 +735,15 @@ pub fn demo(suit_dir: &Path, out: &Path) -> anyhow::Result<()> {
     };
     let input = frames.to_string_lossy().into_owned();
     let camera = footage.join("camera.toml");
-    run(&input, suit_dir, out, Some(&camera), &garment, &pose)?;
+    run(
+        &input,
+        suit_dir,
+        out,
+        Some(&camera),
+        TakeClock::InputFrames,
+        &garment,
+        &pose,
+    )?;
     let truth = Motion::load(&footage.join("motion.bvh"))?;
     let take = Motion::load(&out.join("take.bvh"))?;
     let suit = suitcap::suit::SuitDefinition::load_dir(suit_dir)?;
