@@ -151,10 +151,9 @@ enum Command {
         truth_markers: Option<PathBuf>,
     },
     /// The whole pipeline on a recording (frame directory or Y4M): pose, garment, compositing.
-    /// Writes OUT/take.bvh (one BVH frame per input frame, or with --camera-time per 1/fps of the
-    /// input's timestamps; on the suit's skeleton), the composited
-    /// frames OUT/frames/, OUT/preview.gif and OUT/frames.csv (per frame: person seen, markers,
-    /// milliseconds).
+    /// Writes OUT/take.bvh (on the suit's skeleton; one BVH frame per input frame, or with
+    /// --camera-time per 1/fps of the input's timestamps), the composited frames OUT/frames/,
+    /// OUT/preview.gif and OUT/frames.csv (per frame: person seen, markers, milliseconds).
     Run {
         /// A directory of frames or a .y4m file.
         input: String,
