@@ -153,7 +153,8 @@ enum Command {
     /// The whole pipeline on a recording (frame directory or Y4M): pose, garment, compositing.
     /// Writes OUT/take.bvh (on the suit's skeleton; one BVH frame per input frame, or with
     /// --camera-time per 1/fps of the input's timestamps), the composited frames OUT/frames/,
-    /// OUT/preview.gif and OUT/frames.csv (per frame: person seen, markers, milliseconds).
+    /// OUT/preview.gif and OUT/frames.csv (per input frame: person seen, markers, milliseconds, its
+    /// time and the BVH frame its pose went to).
     Run {
         /// A directory of frames or a .y4m file.
         input: String,

@@ -132,6 +132,16 @@ fn run_writes_one_bvh_frame_per_input_frame() {
             frames == 12,
             "{printed}"
         );
+        // frames.csv names each input frame's time and BVH frame: the file after the gap
+        // (input frame 5, taken at 6/30 s) is BVH frame 6 on the capture's time.
+        let rows = std::fs::read_to_string(out.join("frames.csv")).expect("frames.csv");
+        let row = rows.lines().find(|l| l.starts_with("5,")).expect("row 5");
+        let bvh_frame = if frames == 12 {
+            ",0.200000,6"
+        } else {
+            ",0.200000,5"
+        };
+        assert!(row.ends_with(bvh_frame), "{row}");
     }
 }
 

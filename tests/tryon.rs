@@ -177,7 +177,8 @@ fn a_corrupt_frame_is_skipped_and_named_and_an_empty_scene_hides_the_garment() {
     assert_eq!(rows.lines().count(), 13, "{rows}");
     for k in [6, 11] {
         assert!(
-            rows.lines().any(|l| l == format!("{k},,,skipped,,,,,,,,")),
+            rows.lines()
+                .any(|l| l == format!("{k},,,skipped,,,,,,,,,,")),
             "{rows}"
         );
     }

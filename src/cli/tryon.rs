@@ -317,7 +317,8 @@ impl Take {
     /// Records the pose of input frame `index`, shown at `time_s` into the stream, first filling
     /// in the clock's frames between the last pose pushed and it (between the two poses; before the
     /// first pose, with this one).
-    pub fn push(&mut self, index: u64, time_s: f64, frame: &[f32]) -> anyhow::Result<()> {
+    /// Returns the BVH frame it went to.
+    pub fn push(&mut self, index: u64, time_s: f64, frame: &[f32]) -> anyhow::Result<u64> {
         let slot = self.slot_for(index, time_s);
         self.fill_until(slot, frame)?;
         self.motion.push_frame(frame)?;
@@ -328,7 +329,7 @@ impl Take {
         };
         self.first.get_or_insert(placed);
         self.last = Some(placed);
-        Ok(())
+        Ok(slot)
     }
 
     /// Holds the last pose over the input frames after the last one pushed, up to the stream's
@@ -415,7 +416,7 @@ impl RunOutputs {
             frames_dir,
             preview: Some(GifPreview::create(&out.join("preview.gif"), settings)?),
             rows: String::from(
-                "frame,person,markers,garment,strain_p95,penetration_cm,segment_ms,describe_ms,regress_ms,cloth_ms,render_ms,composite_ms\n",
+                "frame,person,markers,garment,strain_p95,penetration_cm,segment_ms,describe_ms,regress_ms,cloth_ms,render_ms,composite_ms,time_s,bvh_frame\n",
             ),
             next_index: 0,
         })
@@ -425,12 +426,13 @@ impl RunOutputs {
     /// garment column says `skipped` and the rest is empty.
     fn skipped_until(&mut self, index: u64) {
         for k in self.next_index..index {
-            self.rows.push_str(&format!("{k},,,skipped,,,,,,,,\n"));
+            self.rows.push_str(&format!("{k},,,skipped,,,,,,,,,,\n"));
         }
         self.next_index = self.next_index.max(index);
     }
 
-    fn add(&mut self, out: &Output) -> anyhow::Result<()> {
+    /// The row and composited frame of `out`, whose pose went to BVH frame `bvh_frame`.
+    fn add(&mut self, out: &Output, bvh_frame: u64) -> anyhow::Result<()> {
         self.skipped_until(out.index);
         self.next_index = out.index + 1;
         let path = self.frames_dir.join(format!("{:06}.png", out.index));
@@ -449,7 +451,7 @@ impl RunOutputs {
                 )
             });
         self.rows.push_str(&format!(
-            "{},{},{},{},{strain},{depth},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}\n",
+            "{},{},{},{},{strain},{depth},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.6},{bvh_frame}\n",
             out.index,
             out.pose.person as u8,
             out.pose.markers.len(),
@@ -459,7 +461,8 @@ impl RunOutputs {
             t.regress,
             t.cloth,
             t.render,
-            t.composite
+            t.composite,
+            out.timestamp_s
         ));
         Ok(())
     }
@@ -612,7 +615,7 @@ pub fn run(
             }
             let result = take
                 .push(output.index, output.timestamp_s, &output.pose.frame)
-                .and_then(|()| outputs.add(&output));
+                .and_then(|bvh_frame| outputs.add(&output, bvh_frame));
             bar.inc(1);
             match result {
                 Ok(()) => true,
