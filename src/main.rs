@@ -41,7 +41,7 @@ enum SuitCommand {
     /// Printable sewing panels of the suit's marker layout at true size: PNG (at --dpi) and SVG per
     /// panel, made to measure for a built-in subject or a height and girth.
     Pattern {
-        #[arg(long, default_value = "suits/default")]
+        #[arg(long, default_value_os_t = suitcap::suit::default_suit_dir())]
         suit: PathBuf,
         #[arg(long)]
         out: PathBuf,
@@ -89,7 +89,7 @@ enum Command {
     /// Segment every frame of INPUT with the suit's trained segmenter: one PNG mask per frame
     /// (same names as a frame directory's files, else NNNNNN.png).
     Segment {
-        #[arg(long, default_value = "suits/default")]
+        #[arg(long, default_value_os_t = suitcap::suit::default_suit_dir())]
         suit: PathBuf,
         /// A directory of frames or a .y4m file.
         #[arg(long)]
@@ -131,7 +131,7 @@ enum Command {
     /// one CSV row per frame; optionally the detected markers, and their recall and precision
     /// against a generated dataset's markers.csv.
     Describe {
-        #[arg(long, default_value = "suits/default")]
+        #[arg(long, default_value_os_t = suitcap::suit::default_suit_dir())]
         suit: PathBuf,
         /// A directory of frames or a .y4m file.
         #[arg(long)]
@@ -158,7 +158,7 @@ enum Command {
     Run {
         /// A directory of frames or a .y4m file.
         input: String,
-        #[arg(long, default_value = "suits/default")]
+        #[arg(long, default_value_os_t = suitcap::suit::default_suit_dir())]
         suit: PathBuf,
         #[arg(long)]
         out: PathBuf,
@@ -181,7 +181,7 @@ enum Command {
         /// /dev/videoN or a camera index (a frame directory or .y4m file also works, for testing).
         #[arg(long, default_value = "/dev/video0")]
         device: String,
-        #[arg(long, default_value = "suits/default")]
+        #[arg(long, default_value_os_t = suitcap::suit::default_suit_dir())]
         suit: PathBuf,
         /// The camera's calibration (default: camera.toml beside a recorded input or in the suit, else a
         /// level 60° webcam 1.2 m high).
@@ -221,7 +221,7 @@ enum Command {
     /// The quick start: the footage bundled with the default suit through the whole pipeline
     /// (no camera, no network, nothing to train); results in OUT.
     Demo {
-        #[arg(long, default_value = "suits/default")]
+        #[arg(long, default_value_os_t = suitcap::suit::default_suit_dir())]
         suit: PathBuf,
         #[arg(long, default_value = "out/demo")]
         out: PathBuf,
@@ -237,7 +237,7 @@ enum Command {
     /// Validate a suit directory (suit.toml, and that its trained models, if any, load with this
     /// build) and, optionally, a dataset against it.
     Check {
-        #[arg(long, default_value = "suits/default")]
+        #[arg(long, default_value_os_t = suitcap::suit::default_suit_dir())]
         suit: PathBuf,
         #[arg(long)]
         data: Option<PathBuf>,

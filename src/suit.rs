@@ -150,10 +150,32 @@ struct JointFile {
     bvh: String,
 }
 
+/// The file of a suit directory that defines it.
+pub const SUIT_FILE: &str = "suit.toml";
+
+/// The suit the commands use without `--suit`: `suits/default` under the current directory (the
+/// repository, as the quick start runs), else the one of the repository this build was made
+/// from, so a binary run from elsewhere still finds the suit it ships with; `suits/default` when
+/// neither has a `suit.toml` (loading it then names that path).
+pub fn default_suit_dir() -> PathBuf {
+    first_suit_dir(
+        PathBuf::from("suits/default"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default"),
+    )
+}
+
+/// `here` if it holds a suit or `built` does not, else `built`.
+fn first_suit_dir(here: PathBuf, built: PathBuf) -> PathBuf {
+    if !here.join(SUIT_FILE).is_file() && built.join(SUIT_FILE).is_file() {
+        return built;
+    }
+    here
+}
+
 impl SuitDefinition {
     /// Reads `DIR/suit.toml`.
     pub fn load_dir(dir: &Path) -> Result<SuitDefinition, SuitError> {
-        SuitDefinition::load(&dir.join("suit.toml"))
+        SuitDefinition::load(&dir.join(SUIT_FILE))
     }
 
     /// Reads and validates a suit file.
@@ -447,6 +469,22 @@ mod tests {
 
     fn parse(text: &str) -> Result<SuitDefinition, SuitError> {
         SuitDefinition::parse(text, Path::new("suit.toml"))
+    }
+
+    #[test]
+    fn the_default_suit_is_found_from_here_and_from_elsewhere() {
+        let tmp = tempfile::tempdir().unwrap();
+        let (here, built) = (tmp.path().join("here"), tmp.path().join("built"));
+        // Neither holds a suit: the relative path, which loading then names.
+        assert_eq!(first_suit_dir(here.clone(), built.clone()), here);
+        std::fs::create_dir_all(&built).unwrap();
+        std::fs::write(built.join(SUIT_FILE), "").unwrap();
+        assert_eq!(first_suit_dir(here.clone(), built.clone()), built);
+        std::fs::create_dir_all(&here).unwrap();
+        std::fs::write(here.join(SUIT_FILE), "").unwrap();
+        assert_eq!(first_suit_dir(here.clone(), built), here);
+        // Tests run in the repository, which has the suit.
+        assert_eq!(default_suit_dir(), PathBuf::from("suits/default"));
     }
 
     #[test]

@@ -30,7 +30,7 @@ pub struct BenchArgs {
     /// Frame size of the bundled footage: 640x480 or 1440x1080.
     #[arg(long, default_value = "640x480")]
     size: String,
-    #[arg(long, default_value = "suits/default")]
+    #[arg(long, default_value_os_t = suitcap::suit::default_suit_dir())]
     suit: PathBuf,
     /// Frames to process in each measurement (the footage is replayed cyclically).
     #[arg(long, default_value_t = 120)]

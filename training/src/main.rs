@@ -141,7 +141,7 @@ enum Command {
         #[arg(long)]
         camera: PathBuf,
         /// The suit worn (its joints must be in the BVH).
-        #[arg(long, default_value = "suits/default")]
+        #[arg(long, default_value_os_t = suitcap::suit::default_suit_dir())]
         suit: PathBuf,
         #[arg(long)]
         out: PathBuf,
