@@ -399,6 +399,17 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         assert!(stderr.contains(flag), "{stderr}");
         assert!(!out.exists(), "nothing written for a bad setting");
     }
+    // A truth directory that is not there (a typo) is an error, not 12 frames "not scored".
+    let output = segment(&out, &tmp.path().join("no_such_masks"), &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success() && stderr.contains("--truth"),
+        "{stderr}"
+    );
+    assert!(
+        !out.exists(),
+        "nothing written for a missing truth directory"
+    );
     // Truth masks of a few frames only (as hand-labelled ones are): those frames are scored.
     let few = tmp.path().join("labelled");
     std::fs::create_dir_all(&few).expect("dir");
