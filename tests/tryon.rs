@@ -297,6 +297,25 @@ fn drape_composites_a_garment_on_the_true_motion_and_reports_quality() {
         .filter(|(a, b)| a != b)
         .count();
     assert!(changed > 500, "only {changed} pixels changed");
+    // Masks given from a directory that is not there: an error before anything is written, not
+    // a garment silently sized for nobody.
+    let missing = suitcap()
+        .arg("drape")
+        .arg("--motion")
+        .arg(data.join("motion.bvh"))
+        .arg("--camera")
+        .arg(data.join("camera.toml"))
+        .arg("--frames")
+        .arg(data.join("frames"))
+        .arg("--masks")
+        .arg(tmp.path().join("no_such_masks"))
+        .args(["--garment", "skirt", "--out"])
+        .arg(tmp.path().join("not_written"))
+        .output()
+        .expect("runs");
+    assert!(!missing.status.success());
+    assert!(text(&missing).contains("--masks"), "{}", text(&missing));
+    assert!(!tmp.path().join("not_written").exists());
 }
 
 #[test]

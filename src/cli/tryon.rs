@@ -802,6 +802,9 @@ pub fn drape(
 ) -> anyhow::Result<()> {
     use suitcap::body_size::{BodySize, BodySizeEstimator, Silhouette};
     use suitcap::mask::Mask;
+    if let Some(dir) = masks.filter(|dir| !dir.is_dir()) {
+        bail!("--masks {}: no such directory of masks", dir.display());
+    }
     let motion = Motion::load(motion_path)?;
     let camera = Camera::load(camera_path)?;
     let mut source = suitcap::source::directory::DirectorySource::open(frames_dir, 30.0)?;
@@ -837,6 +840,12 @@ pub fn drape(
                 );
             }
             let size = estimator.estimate();
+            if size.frames == 0 {
+                eprintln!(
+                    "warning: no mask in {} is named like a frame of the motion (000000.png, …): the garment is sized for the motion's skeleton at girth 1",
+                    dir.display()
+                );
+            }
             println!(
                 "body size from {} silhouettes in {}: height {:.1} cm (×{:.3} the motion's skeleton), girth {:.2}",
                 size.frames,
