@@ -259,18 +259,28 @@ fn drape_composites_a_garment_on_the_true_motion_and_reports_quality() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let data = generated_clip(&tmp.path().join("clip"), 10);
     let out = tmp.path().join("drape");
-    let output = suitcap()
-        .arg("drape")
-        .arg("--motion")
-        .arg(data.join("motion.bvh"))
-        .arg("--camera")
-        .arg(data.join("camera.toml"))
-        .arg("--frames")
-        .arg(data.join("frames"))
-        .args(["--garment", "skirt", "--live-cloth", "--out"])
-        .arg(&out)
-        .output()
-        .expect("runs");
+    let drape = |masks: Option<&Path>, extra: &[&str], out: &Path| {
+        let mut command = suitcap();
+        command
+            .arg("drape")
+            .arg("--motion")
+            .arg(data.join("motion.bvh"))
+            .arg("--camera")
+            .arg(data.join("camera.toml"))
+            .arg("--frames")
+            .arg(data.join("frames"));
+        if let Some(masks) = masks {
+            command.arg("--masks").arg(masks);
+        }
+        command
+            .args(["--garment", "skirt"])
+            .args(extra)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .expect("runs")
+    };
+    let output = drape(None, &["--live-cloth"], &out);
     let message = text(&output);
     assert!(output.status.success(), "{message}");
     assert!(
@@ -299,20 +309,11 @@ fn drape_composites_a_garment_on_the_true_motion_and_reports_quality() {
     assert!(changed > 500, "only {changed} pixels changed");
     // Masks given from a directory that is not there: an error before anything is written, not
     // a garment silently sized for nobody.
-    let missing = suitcap()
-        .arg("drape")
-        .arg("--motion")
-        .arg(data.join("motion.bvh"))
-        .arg("--camera")
-        .arg(data.join("camera.toml"))
-        .arg("--frames")
-        .arg(data.join("frames"))
-        .arg("--masks")
-        .arg(tmp.path().join("no_such_masks"))
-        .args(["--garment", "skirt", "--out"])
-        .arg(tmp.path().join("not_written"))
-        .output()
-        .expect("runs");
+    let missing = drape(
+        Some(&tmp.path().join("no_such_masks")),
+        &[],
+        &tmp.path().join("not_written"),
+    );
     assert!(!missing.status.success());
     assert!(text(&missing).contains("--masks"), "{}", text(&missing));
     assert!(!tmp.path().join("not_written").exists());
