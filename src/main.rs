@@ -20,7 +20,7 @@ use suitcap::segment::{Segmenter, SegmenterOptions, SegmenterTables, StageTimes}
 use suitcap::source::directory::{
     png_names_of_frames, timestamps_line, TIMESTAMPS_FILE, TIMESTAMPS_HEADER,
 };
-use suitcap::source::{open_source, SourceError, SourceOptions};
+use suitcap::source::{open_source, SourceOptions};
 use suitcap::suit::SuitDefinition;
 
 mod cli;
@@ -301,10 +301,7 @@ fn capture(
                 written += 1;
             }
             Ok(None) => break,
-            Err(
-                e @ (suitcap::source::SourceError::CorruptFrame { .. }
-                | suitcap::source::SourceError::SizeMismatch { .. }),
-            ) => {
+            Err(e) if e.skipped_frame().is_some() => {
                 eprintln!("skipped: {e}");
                 skipped.push(e.to_string());
             }
@@ -495,7 +492,7 @@ fn next_good_frame(
     loop {
         match source.next_frame() {
             Ok(frame) => return frame,
-            Err(e @ (SourceError::CorruptFrame { .. } | SourceError::SizeMismatch { .. })) => {
+            Err(e) if e.skipped_frame().is_some() => {
                 eprintln!("skipped: {e}");
                 skipped.push(e.to_string());
             }

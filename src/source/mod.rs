@@ -147,6 +147,19 @@ pub enum SourceError {
     UnknownSpec { spec: String, reason: String },
 }
 
+impl SourceError {
+    /// The frame this error is about when the stream can go on past it (a corrupt frame, or one
+    /// of another size): callers skip and name it. `None` for an error that ends the stream.
+    pub fn skipped_frame(&self) -> Option<u64> {
+        match self {
+            SourceError::CorruptFrame { index, .. } | SourceError::SizeMismatch { index, .. } => {
+                Some(*index)
+            }
+            _ => None,
+        }
+    }
+}
+
 /// What a source spec names.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum SourceSpec {
@@ -233,6 +246,30 @@ pub fn timestamp_at_fps(index: u64, fps: f64) -> Duration {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_per_frame_errors_are_skipped_frames() {
+        let corrupt = SourceError::CorruptFrame {
+            source_name: "x".into(),
+            index: 4,
+            reason: "bad".into(),
+        };
+        let size = SourceError::SizeMismatch {
+            path: PathBuf::from("x/000005.png"),
+            index: 5,
+            expected: (4, 4),
+            got: (5, 4),
+        };
+        let truncated = SourceError::TruncatedFrame {
+            source_name: "x".into(),
+            index: 6,
+            expected: 12,
+            got: 3,
+        };
+        assert_eq!(corrupt.skipped_frame(), Some(4));
+        assert_eq!(size.skipped_frame(), Some(5));
+        assert_eq!(truncated.skipped_frame(), None);
+    }
 
     #[test]
     fn specs_are_classified() {

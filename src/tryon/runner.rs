@@ -436,17 +436,16 @@ fn capture_frames(
                 }
             }
             Ok(None) => break,
-            Err(
-                e @ (SourceError::CorruptFrame { index, .. }
-                | SourceError::SizeMismatch { index, .. }),
-            ) => {
-                seen(index);
-                end.skipped.push(e.to_string());
-            }
-            Err(e) => {
-                end.error = Some(e.to_string());
-                break;
-            }
+            Err(e) => match e.skipped_frame() {
+                Some(index) => {
+                    seen(index);
+                    end.skipped.push(e.to_string());
+                }
+                None => {
+                    end.error = Some(e.to_string());
+                    break;
+                }
+            },
         }
     }
     queue.close();

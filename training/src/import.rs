@@ -312,23 +312,22 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
         let frame = match video.next_frame() {
             Ok(Some(frame)) => frame,
             Ok(None) => break,
-            // One bad frame leaves a gap in time, as a frame the camera dropped does.
-            Err(
-                e @ (source::SourceError::CorruptFrame { index, .. }
-                | source::SourceError::SizeMismatch { index, .. }),
-            ) => {
-                unreadable.push((index as usize, e.to_string()));
-                continue;
-            }
-            Err(e) => {
-                return Err(e).with_context(|| {
-                    format!(
-                        "{}: the video failed after {} imported frames",
-                        o.video,
-                        source_frames.len()
-                    )
-                })
-            }
+            Err(e) => match e.skipped_frame() {
+                // One bad frame leaves a gap in time, as a frame the camera dropped does.
+                Some(index) => {
+                    unreadable.push((index as usize, e.to_string()));
+                    continue;
+                }
+                None => {
+                    return Err(e).with_context(|| {
+                        format!(
+                            "{}: the video failed after {} imported frames",
+                            o.video,
+                            source_frames.len()
+                        )
+                    })
+                }
+            },
         };
         let index = frame.index as usize;
         let time = frame.timestamp.as_secs_f64();
