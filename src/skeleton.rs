@@ -283,7 +283,7 @@ pub fn interpolate_frames(rotation: &[bool], a: &[f32], b: &[f32], t: f32, out: 
         let va = a.get(k).copied().unwrap_or(0.0);
         let vb = b.get(k).copied().unwrap_or(0.0);
         let delta = if is_rotation {
-            shortest_degrees(vb - va)
+            wrap_degrees(vb - va)
         } else {
             vb - va
         };
@@ -291,8 +291,8 @@ pub fn interpolate_frames(rotation: &[bool], a: &[f32], b: &[f32], t: f32, out: 
     }));
 }
 
-/// An angle difference wrapped to [−180°, 180°).
-fn shortest_degrees(delta: f32) -> f32 {
+/// An angle difference `a − b` wrapped to [−180°, 180°) (degrees): the short way round.
+pub fn wrap_degrees(delta: f32) -> f32 {
     (delta + 180.0).rem_euclid(360.0) - 180.0
 }
 
@@ -333,9 +333,9 @@ pub(crate) mod tests {
 
     #[test]
     fn frames_interpolate_rotations_the_short_way_and_positions_straight() {
-        assert_eq!(shortest_degrees(350.0), -10.0);
-        assert_eq!(shortest_degrees(-350.0), 10.0);
-        assert_eq!(shortest_degrees(90.0), 90.0);
+        assert_eq!(wrap_degrees(350.0), -10.0);
+        assert_eq!(wrap_degrees(-350.0), 10.0);
+        assert_eq!(wrap_degrees(90.0), 90.0);
         let arm = two_joint_arm();
         let rotation = arm.rotation_channels();
         assert_eq!(

@@ -8,12 +8,8 @@
 use glam::{Affine3A, Vec3};
 
 use super::{compose, PoseLayout};
+pub use crate::skeleton::wrap_degrees;
 use crate::skeleton::Skeleton;
-
-/// `a − b` wrapped to [−180°, 180°).
-pub fn wrap_degrees(d: f32) -> f32 {
-    (d + 180.0).rem_euclid(360.0) - 180.0
-}
 
 /// Accumulated errors per estimated joint.
 #[derive(Clone, Debug, PartialEq)]
