@@ -242,8 +242,8 @@ pub struct Take {
     rotation: Vec<bool>,
     fps: f64,
     clock: TakeClock,
-    /// The input frame BVH frame 0 stands for: 0 for a recording; `None` for a live take, which
-    /// starts at whichever frame is shown when recording starts.
+    /// The input frame BVH frame 0 stands for: 0 for a recording; for a live take, which starts
+    /// at whichever frame is shown when recording starts, `None` until the first pose.
     first_index: Option<u64>,
     /// The first pose pushed, to which the camera's clock measures every later frame's time.
     first: Option<Placed>,
@@ -307,9 +307,6 @@ impl Take {
                 let elapsed = ((time_s - first.time_s) * self.fps).round().max(0.0);
                 (first.slot + elapsed as u64).max(last.slot + 1)
             }
-            (TakeClock::InputFrames, Some(first), _) => {
-                first.slot + index.saturating_sub(first.index)
-            }
             _ => index.saturating_sub(self.first_index.unwrap_or(index)),
         }
     }
@@ -328,6 +325,7 @@ impl Take {
             slot,
         };
         self.first.get_or_insert(placed);
+        self.first_index.get_or_insert(index);
         self.last = Some(placed);
         Ok(slot)
     }
