@@ -570,9 +570,7 @@ fn segment(
         }
         tables.weights = suitcap::segment::Weights::from_array(array);
     }
-    if let Some(dir) = truth.filter(|dir| !dir.is_dir()) {
-        bail!("--truth {}: no such directory of masks", dir.display());
-    }
+    cli::ensure_mask_dir("--truth", truth)?;
     let mut segmenter = Segmenter::new(tables, &suit, options);
     let names = output_names(input)?;
     let mut source = open_source(input, &SourceOptions::default())?;

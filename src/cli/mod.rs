@@ -27,3 +27,14 @@ pub fn ensure_mask_size(
     );
     Ok(())
 }
+
+/// Errors unless `dir`, given with option `option` ("--truth", "--masks"), is a directory: a
+/// mistyped path is named before anything is written, not taken for masks that are all missing.
+pub fn ensure_mask_dir(option: &str, dir: Option<&std::path::PathBuf>) -> anyhow::Result<()> {
+    match dir {
+        Some(dir) if !dir.is_dir() => {
+            anyhow::bail!("{option} {}: no such directory of masks", dir.display())
+        }
+        _ => Ok(()),
+    }
+}

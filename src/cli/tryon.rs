@@ -800,9 +800,7 @@ pub fn drape(
 ) -> anyhow::Result<()> {
     use suitcap::body_size::{BodySize, BodySizeEstimator, Silhouette};
     use suitcap::mask::Mask;
-    if let Some(dir) = masks.filter(|dir| !dir.is_dir()) {
-        bail!("--masks {}: no such directory of masks", dir.display());
-    }
+    super::ensure_mask_dir("--masks", masks)?;
     let motion = Motion::load(motion_path)?;
     let camera = Camera::load(camera_path)?;
     let mut source = suitcap::source::directory::DirectorySource::open(frames_dir, 30.0)?;
