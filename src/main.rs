@@ -718,6 +718,7 @@ fn describe(
     let kind = DescriptorKind::parse(descriptor).with_context(|| {
         format!("--descriptor '{descriptor}': expected fc, hog, fc+hog, full or silhouette")
     })?;
+    cli::ensure_mask_dir("--masks", masks)?;
     let suit = SuitDefinition::load_dir(suit_dir)?;
     let codebooks = Codebooks::load(suit_dir)?;
     let mut segmenter = match masks {

@@ -1,6 +1,7 @@
 //! The runtime binary end to end with the shipped default suit: a generated clip in, a BVH take out,
 //! one BVH frame per input frame, readable again; `segment` with and without the part memory and the
-//! person's part colours; and clear errors for a broken model or setting.
+//! person's part colours; `describe`'s rows; and clear errors for a broken model, setting or
+//! directory.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -432,5 +433,45 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
     assert!(
         stderr.contains("000002.png") && stderr.contains("10x10 truth mask"),
         "{stderr}"
+    );
+}
+
+#[test]
+fn describe_writes_a_row_per_frame_and_names_a_missing_mask_directory() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let data = generated_clip(&tmp.path().join("clip"));
+    let describe = |masks: &Path, out: &Path| {
+        suitcap()
+            .args(["describe", "--suit"])
+            .arg(repo("suits/default"))
+            .arg("--input")
+            .arg(data.join("frames"))
+            .arg("--masks")
+            .arg(masks)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .expect("runs")
+    };
+    let out = tmp.path().join("descriptors.csv");
+    succeeded(describe(&data.join("masks"), &out));
+    let csv = std::fs::read_to_string(&out).expect("descriptors written");
+    // A header and one row per frame, each with the frame's name and 304 values after the flag.
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 13, "{csv}");
+    assert!(lines[1..].iter().all(|l| l.split(',').count() == 2 + 304));
+    // A mask directory that is not there (a typo) is named, before anything is written; it was
+    // reported as frame 0's missing mask.
+    let missing = tmp.path().join("no_such_masks");
+    let out = tmp.path().join("none.csv");
+    let output = describe(&missing, &out);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success() && stderr.contains("--masks") && stderr.contains("no_such_masks"),
+        "{stderr}"
+    );
+    assert!(
+        !out.exists(),
+        "nothing written for a missing mask directory"
     );
 }
