@@ -133,9 +133,10 @@
 //!      until no edge is outside the bound, at most six times (`Cloth::limit_strain`), 32 times in
 //!      a frame's last substep, whose positions are the ones drawn and measured
 //!      ([`FRAME_END_STRAIN_LIMIT_PASSES`]). The last round meets the trunk only: where a
-//!      sleeve (or a dress's armhole) ramps into an arm, the arm's push moved one end of an edge further out than the other after the limit had set it
-//!      (on CMU 13_39's jump the 4,000-vertex dress kept 13.0 % and the quality T-shirt 11.1 %;
-//!      now 9.0 % and 9.2 %; without the arms in every round the jump's T-shirt had 17.3 %). One
+//!      sleeve (or a dress's armhole) ramps into an arm, the arm's push moved one end of an edge
+//!      further out than the other after the limit had set it (on CMU 13_39's jump the
+//!      4,000-vertex dress kept 13.0 % and the quality T-shirt 11.1 %; now 9.0 % and 9.2 %;
+//!      without the arms in every round the jump's T-shirt had 17.3 %). One
 //!      XPBD iteration leaves the bulk of the edges within 2 %, but a few edges where a capsule pushes
 //!      one end and not the other reached 20–50 % on the kick: the armpit, where trunk cloth lies
 //!      inside an arm sunk into the chest while the arm pushes the sleeve's ramp vertices out, and
@@ -1575,13 +1576,13 @@ impl Cloth {
     }
 
     /// Strain limiting after the collisions (Provot 1995; see the module documentation): up to
-    /// `rounds` rounds ([`STRAIN_LIMIT_PASSES`], [`FRAME_END_STRAIN_LIMIT_PASSES`]), the edges longer than `1 + strain_limit` or shorter than
-    /// `1 − strain_limit` times their rest length are found, projected onto that bound
-    /// [`STRAIN_LIMIT_SWEEPS`] times (a vertex in contact takes [`STRAIN_LIMIT_CONTACT_SHARE`] of
-    /// its share, so free cloth follows the cloth a capsule holds rather than pulling it back in),
-    /// and the vertices moved meet the capsules again (in the last round the trunk's only). The
-    /// first round looks at every edge, the later ones only at the edges of the vertices the round
-    /// before moved.
+    /// `rounds` rounds ([`STRAIN_LIMIT_PASSES`], [`FRAME_END_STRAIN_LIMIT_PASSES`]), the edges
+    /// longer than `1 + strain_limit` or shorter than `1 − strain_limit` times their rest length
+    /// are found, projected onto that bound [`STRAIN_LIMIT_SWEEPS`] times (a vertex in contact
+    /// takes [`STRAIN_LIMIT_CONTACT_SHARE`] of its share, so free cloth follows the cloth a capsule
+    /// holds rather than pulling it back in), and the vertices moved meet the capsules again (in
+    /// the last round the trunk's only). The first round looks at every edge, the later ones only
+    /// at the edges of the vertices the round before moved.
     fn limit_strain(&mut self, rounds: usize) {
         let limit = self.settings.strain_limit;
         if limit <= 0.0 {
