@@ -132,7 +132,7 @@
 //!      pulling it back in), and the vertices moved meet the capsules again; the round repeats
 //!      until no edge is outside the bound, at most six times (`Cloth::limit_strain`), 32 times in
 //!      a frame's last substep, whose positions are the ones drawn and measured
-//!      ([`FRAME_END_STRAIN_LIMIT_PASSES`]). The last round meets the trunk only: where a
+//!      (`FRAME_END_STRAIN_LIMIT_PASSES`). The last round meets the trunk only: where a
 //!      sleeve (or a dress's armhole) ramps into an arm, the arm's push moved one end of an edge
 //!      further out than the other after the limit had set it (on CMU 13_39's jump the
 //!      4,000-vertex dress kept 13.0 % and the quality T-shirt 11.1 %; now 9.0 % and 9.2 %;
