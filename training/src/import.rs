@@ -232,7 +232,7 @@ pub fn import(o: &ImportOptions) -> anyhow::Result<ImportReport> {
         format!(
             "{}: does not carry the suit's joints ({})",
             o.bvh.display(),
-            o.suit.join("suit.toml").display()
+            o.suit.join(suitcap::suit::SUIT_FILE).display()
         )
     })?;
     if motion.frame_count() == 0 {

@@ -701,6 +701,9 @@ fn pose_vector_error(
     total / count.max(1) as f64
 }
 
+/// The fewest distinct clips with which whole clips are held back ([`held_back`]).
+const HOLD_BACK_CLIPS_FROM: usize = 5;
+
 /// Whether frame `frame` of a dataset rendered from clip `clip` (of `clips` distinct clips, see
 /// [`clip_indices`]) is held back to choose the kernel width: with five or more clips every fifth
 /// *clip*, all its datasets (whole motions, so that the width is chosen for motions the regressor
@@ -708,7 +711,7 @@ fn pose_vector_error(
 /// every tenth frame held back rewarded memorising them: held-back error 3.8° for a regressor
 /// making about 11° on novel motions), with fewer every tenth frame.
 fn held_back(clip: usize, clips: usize, frame: usize) -> bool {
-    if clips >= 5 {
+    if clips >= HOLD_BACK_CLIPS_FROM {
         clip % 5 == 4
     } else {
         frame % 10 == 9
@@ -721,7 +724,7 @@ fn held_back(clip: usize, clips: usize, frame: usize) -> bool {
 /// a motion the suit has not seen) and frames for the basis functions asked for.
 fn training_size_warning(frames: usize, clips: usize, basis: usize) -> Option<String> {
     let mut lacks = Vec::new();
-    if clips < 5 {
+    if clips < HOLD_BACK_CLIPS_FROM {
         lacks.push(format!(
             "{clips} distinct motion{}: the kernel width is chosen on every tenth frame of the same motions, so the held-back error below says little about motions the suit has not seen (five or more motions hold whole ones back; the default suit has 27)",
             if clips == 1 { "" } else { "s" }
@@ -1784,7 +1787,7 @@ fn experiments(
             std::fs::create_dir_all(&variant)
                 .with_context(|| format!("cannot create {}", variant.display()))?;
             for name in [
-                "suit.toml",
+                suitcap::suit::SUIT_FILE,
                 suitcap::segment::tables::SEGMENTER_FILE,
                 "codebook_fc.bin",
                 "codebook_hog.bin",
