@@ -113,9 +113,10 @@
 //!      capsule is pushed out along the capsule's normal. The trunk comes first; cloth that rests
 //!      on an arm ([`collision_group`](super::proxies::collision_group)) then meets the arms, and
 //!      the trunk again if an arm pushed it in. Trunk cloth ignores the arms and the sleeve enters
-//!      them over a 6 cm ramp, because the body's hanging arms overlap its torso by several
+//!      them over a 10 cm ramp (`ARM_RAMP_CM`; 6 cm until the eighth session of 2026-12-06),
+//!      because the body's hanging arms overlap its torso by several
 //!      centimetres and no cloth position is outside both. Arm cloth (a sleeve, a dress's armhole)
-//!      within 2 cm of the trunk may also lie inside an arm, from 6 cm deep on the trunk's
+//!      within 2 cm of the trunk may also lie inside an arm, from the ramp's 10 cm deep on the trunk's
 //!      surface to nothing 2 cm off it (`buried_arm_allowance`): before, the trunk won on its
 //!      surface and the arm pushed everything else out at once, so where a lowered arm sank into
 //!      the chest one armpit vertex stayed on the trunk inside the arm while its neighbour, 3 mm
@@ -237,8 +238,16 @@ use super::topology::{hinges, unique_edges, Adjacency};
 const INTERLEAVE_WINDOW: usize = 256;
 
 /// Arm collision weight: 0 for cloth at least as near the trunk as an arm at rest, rising smoothly
-/// to 1 for cloth this much nearer an arm than the trunk, cm.
-const ARM_RAMP_CM: f32 = 6.0;
+/// to 1 for cloth this much nearer an arm than the trunk, cm; cloth on the ramp may lie inside an
+/// arm by up to (1 − weight) times this. 10 cm, not the 6 cm it was: the arm pushes the sleeve
+/// out more gradually where a lowered arm sinks into the chest. On `scripts/eval_cloth.sh`'s 46
+/// cases (chosen on them, so optimistic) 6 / 8 / **10** / 12 cm gave a largest worst-frame
+/// 95th-percentile strain of 1.98 / 1.85 / **1.85** / 2.00 %, and 9 / 10 / **0** / 0 vertices
+/// tunnelled while the garments were put on; the bundled demo's live T-shirt drape
+/// (`suitcap drape --live-cloth --masks`) 2.74 % → 1.15 % in its worst frame, and 1.08–1.30 %
+/// against 1.32–2.49 % over seven garment resolutions (docs/measurements.md, eighth session of
+/// 2026-12-06).
+const ARM_RAMP_CM: f32 = 10.0;
 
 /// Cloth this close to the trunk's collision surface lies on the trunk, cm.
 const ON_TRUNK_CM: f32 = 0.05;
@@ -2934,10 +2943,13 @@ mod tests {
         assert_eq!(buried_arm_allowance(BURIED_ARM_GAP_CM), 0.0);
         assert_eq!(buried_arm_allowance(10.0), 0.0);
         assert_eq!(buried_arm_allowance(f32::INFINITY), 0.0);
+        // Every 0.5 mm off the trunk the allowance falls by the same step, never more: 10 cm over
+        // 2 cm is 2.5 mm per 0.5 mm.
+        let slope = ARM_RAMP_CM / BURIED_ARM_GAP_CM;
         for k in 0..40 {
             let gap = k as f32 * 0.05;
             let step = buried_arm_allowance(gap) - buried_arm_allowance(gap + 0.05);
-            assert!((0.0..=0.151).contains(&step), "{gap}: {step}");
+            assert!((0.0..=slope * 0.05 + 1e-3).contains(&step), "{gap}: {step}");
         }
     }
 
