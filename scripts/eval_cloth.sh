@@ -35,8 +35,11 @@ cases() { grep ' v ' | sed "s/^clip/$1/"; }
   CLOTH_CLIP="$punch" "$bin" | cases punch
   CLOTH_MODE=quality "$bin" | cases quality
   CLOTH_MODE=quality CLOTH_CLIP="$kick11" "$bin" | cases quality-kick11
-} | tee /dev/stderr | awk '
-  { p95 = -1
+} | awk '
+  # Each case line as it comes (not through `tee /dev/stderr`, which reopens a redirected log
+  # file and truncates it, so `eval_cloth.sh > log 2>&1` kept the summary alone), then the summary.
+  { print; fflush()
+    p95 = -1
     for (i = 1; i <= NF; i++) {
       if ($i == "p95" && p95 < 0) p95 = $(i + 1) + 0
       if ($i == "max" && $(i - 1) == "%") largest = $(i + 1) + 0

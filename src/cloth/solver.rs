@@ -114,10 +114,10 @@
 //!      on an arm ([`collision_group`](super::proxies::collision_group)) then meets the arms, and
 //!      the trunk again if an arm pushed it in. Trunk cloth ignores the arms and the sleeve enters
 //!      them over a 10 cm ramp (`ARM_RAMP_CM`; 6 cm until the eighth session of 2026-12-06),
-//!      because the body's hanging arms overlap its torso by several
-//!      centimetres and no cloth position is outside both. Arm cloth (a sleeve, a dress's armhole)
-//!      within 2 cm of the trunk may also lie inside an arm, from the ramp's 10 cm deep on the trunk's
-//!      surface to nothing 2 cm off it (`buried_arm_allowance`): before, the trunk won on its
+//!      because the body's hanging arms overlap its torso by several centimetres and no cloth
+//!      position is outside both. Arm cloth (a sleeve, a dress's armhole) within 2 cm of the
+//!      trunk may also lie inside an arm, from the ramp's 10 cm deep on the trunk's surface to
+//!      nothing 2 cm off it (`buried_arm_allowance`): before, the trunk won on its
 //!      surface and the arm pushed everything else out at once, so where a lowered arm sank into
 //!      the chest one armpit vertex stayed on the trunk inside the arm while its neighbour, 3 mm
 //!      off the trunk, went out to the arm's far side. With the quality mode's 1 cm edges that
