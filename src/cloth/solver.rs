@@ -3005,7 +3005,7 @@ mod tests {
         let (clip, rig) = clip_and_a_rig_of_size("suits/default/demo/640x480/motion.bvh", size);
         let mesh = GarmentMesh::generate(GarmentKind::TShirt, &rig, &GarmentParams::live())
             .expect("tshirt");
-        let summary = run_live(&mesh, &rig, &rig.scale_motion(&clip));
+        let summary = run_live(&mesh, &rig, &clip);
         let percent = |v: f32| 100.0 * v;
         assert!(
             summary.strain_p95_worst <= 0.02,
