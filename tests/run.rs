@@ -14,6 +14,17 @@ fn suitcap() -> Command {
     Command::new(env!("CARGO_BIN_EXE_suitcap"))
 }
 
+/// `suitcap SUBCOMMAND --suit suits/default --input DATA/frames`, for the options that follow.
+fn on_the_frames_of(subcommand: &str, data: &Path) -> Command {
+    let mut command = suitcap();
+    command
+        .args([subcommand, "--suit"])
+        .arg(repo("suits/default"))
+        .arg("--input")
+        .arg(data.join("frames"));
+    command
+}
+
 /// The command's stdout, after checking that it succeeded (its stderr is the failure message).
 fn succeeded(output: std::process::Output) -> String {
     assert!(
@@ -363,11 +374,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
     let data = generated_clip(&tmp.path().join("clip"));
     let all_masks = data.join("masks");
     let segment = |out: &Path, truth: &Path, extra: &[&str]| {
-        suitcap()
-            .args(["segment", "--suit"])
-            .arg(repo("suits/default"))
-            .arg("--input")
-            .arg(data.join("frames"))
+        on_the_frames_of("segment", &data)
             .arg("--truth")
             .arg(truth)
             .arg("--out")
@@ -441,11 +448,7 @@ fn describe_writes_a_row_per_frame_and_names_a_missing_mask_directory() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let data = generated_clip(&tmp.path().join("clip"));
     let describe = |masks: &Path, out: &Path| {
-        suitcap()
-            .args(["describe", "--suit"])
-            .arg(repo("suits/default"))
-            .arg("--input")
-            .arg(data.join("frames"))
+        on_the_frames_of("describe", &data)
             .arg("--masks")
             .arg(masks)
             .arg("--out")
