@@ -107,6 +107,11 @@ enum Command {
         /// of 2026-12-05).
         #[arg(long)]
         part_memory: Option<f32>,
+        /// How many nats the last look for a head, in frames where none was found, leans towards
+        /// the part within the ellipse where the head is expected (default 6; 0 switches that look
+        /// off, as before the ninth session of 2026-12-06).
+        #[arg(long)]
+        head_look: Option<f32>,
         /// Share of the person's own head and shoe colours, learned from the frames before, in the
         /// part test (default 0.3; 0 uses the trained part table alone, as before the ninth session
         /// of 2026-12-05).
@@ -513,11 +518,11 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
     Ok(Some(png_names_of_frames(Path::new(input))?))
 }
 
-/// The segmenter's options with `suitcap segment`'s overrides of the part memory (nats), the
-/// share of the person's own part colours, the edge snapping's room share for marker colours and
-/// the room model (`no_room`: off).
+/// The segmenter's options with `suitcap segment`'s overrides of the part memory and the head
+/// look (nats), the share of the person's own part colours, the edge snapping's room share for
+/// marker colours and the room model (`no_room`: off).
 fn segmenter_options(
-    part_memory: Option<f32>,
+    (part_memory, head_look): (Option<f32>, Option<f32>),
     part_colours: Option<f32>,
     keep_room_share: Option<f32>,
     no_room: bool,
@@ -531,6 +536,12 @@ fn segmenter_options(
             bail!("--part-memory: {nats} is not a finite number >= 0");
         }
         options.part_memory = nats;
+    }
+    if let Some(nats) = head_look {
+        if !(nats.is_finite() && nats >= 0.0) {
+            bail!("--head-look: {nats} is not a finite number >= 0");
+        }
+        options.head_look = nats;
     }
     if let Some(share) = part_colours {
         if !(0.0..=1.0).contains(&share) {
@@ -944,24 +955,29 @@ fn main() -> ExitCode {
             truth,
             weights,
             part_memory,
+            head_look,
             part_colours,
             keep_room_share,
             no_room,
             dump_graph,
             graph_out,
-        } => segmenter_options(*part_memory, *part_colours, *keep_room_share, *no_room).and_then(
-            |options| {
-                segment(
-                    suit,
-                    input,
-                    out,
-                    truth.as_ref(),
-                    weights.as_deref(),
-                    options,
-                    dump_graph.zip(graph_out.as_ref()),
-                )
-            },
-        ),
+        } => segmenter_options(
+            (*part_memory, *head_look),
+            *part_colours,
+            *keep_room_share,
+            *no_room,
+        )
+        .and_then(|options| {
+            segment(
+                suit,
+                input,
+                out,
+                truth.as_ref(),
+                weights.as_deref(),
+                options,
+                dump_graph.zip(graph_out.as_ref()),
+            )
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

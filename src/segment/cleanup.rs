@@ -448,6 +448,78 @@ pub fn part_bands(
 /// orange photograph 0.28–0.59.
 pub const ROUND_FILL: f32 = 0.6;
 
+/// Where a head is expected above the suit, for the head look of a frame whose part test found
+/// none ([`expected_head`]), in cm on the person: an ellipse 16 cm wide and 24 cm tall (a head
+/// with its neck; adults' head breadth is about 15 cm and chin to crown about 23 cm), reaching
+/// [`HEAD_OVERLAP_CM`] into the suit's top rows, above the middle of the suit's top
+/// [`NECK_ROWS_CM`].
+pub const HEAD_HALF_WIDTH_CM: f32 = 8.0;
+/// See [`HEAD_HALF_WIDTH_CM`].
+pub const HEAD_HALF_HEIGHT_CM: f32 = 12.0;
+/// How far the expected head's ellipse reaches down into the suit's top rows, cm (the suit's
+/// collar sits below the chin).
+pub const HEAD_OVERLAP_CM: f32 = 2.0;
+/// The suit's rows whose pixels place the neck: the middle of the suit in its top 8 cm.
+pub const NECK_ROWS_CM: f32 = 8.0;
+
+/// Marks in `head` (resized to the grid) the pixels outside `suit` where a head is expected: the
+/// ellipse of [`HEAD_HALF_WIDTH_CM`] × [`HEAD_HALF_HEIGHT_CM`] centred above the mean column of
+/// the suit's pixels in its top [`NECK_ROWS_CM`], reaching [`HEAD_OVERLAP_CM`] into the suit's
+/// top row `top`, at `px_per_cm` grid pixels per cm. Image up is taken as the person's up, as the
+/// part limits take it. Returns whether any pixel was marked (none without suit in its top rows).
+pub fn expected_head(
+    suit: &[bool],
+    width: usize,
+    top: usize,
+    px_per_cm: f32,
+    head: &mut Vec<bool>,
+) -> bool {
+    head.clear();
+    head.resize(suit.len(), false);
+    if width == 0 || !(px_per_cm > 0.0) {
+        return false;
+    }
+    let height = suit.len() / width;
+    let neck_rows = top..(top + (NECK_ROWS_CM * px_per_cm).ceil().max(1.0) as usize).min(height);
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for y in neck_rows {
+        for (x, _) in suit[y * width..(y + 1) * width]
+            .iter()
+            .enumerate()
+            .filter(|(_, &s)| s)
+        {
+            sum += x as f64;
+            count += 1;
+        }
+    }
+    if count == 0 {
+        return false;
+    }
+    let cx = (sum / count as f64) as f32;
+    let (a, b) = (
+        HEAD_HALF_WIDTH_CM * px_per_cm,
+        HEAD_HALF_HEIGHT_CM * px_per_cm,
+    );
+    let cy = top as f32 + HEAD_OVERLAP_CM * px_per_cm - b;
+    let span = |centre: f32, half: f32, limit: usize| {
+        let lo = (centre - half).floor().max(0.0) as usize;
+        let hi = ((centre + half).ceil() + 1.0).clamp(0.0, limit as f32) as usize;
+        lo..hi.max(lo)
+    };
+    let mut marked = false;
+    for y in span(cy, b, height) {
+        for x in span(cx, a, width) {
+            let (dx, dy) = ((x as f32 - cx) / a, (y as f32 - cy) / b);
+            let i = y * width + x;
+            if dx * dx + dy * dy <= 1.0 && !suit[i] {
+                head[i] = true;
+                marked = true;
+            }
+        }
+    }
+    marked
+}
+
 /// What an attached part (head, hand, shoe) may look like, in pixels of the grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PartLimits {
@@ -686,6 +758,44 @@ mod tests {
             w,
             rows.len(),
         )
+    }
+
+    #[test]
+    fn the_expected_head_is_an_ellipse_above_the_middle_of_the_suits_top_rows() {
+        // Suit columns 4–7 from row 6 down; at 0.25 px per cm the ellipse is 2 × 3 px (half
+        // axes), its centre at x 5.5 (the neck rows 6–7), y 6 + 0.5 − 3 = 3.5. Row 1:
+        // (2.5/3)² = 0.69 leaves |x − 5.5| ≤ 2·√0.31 = 1.1; rows 2–5: (≤ 1.5/3)² ≤ 0.25 leaves
+        // |x − 5.5| ≤ 1.73; row 6 is suit where the ellipse reaches it.
+        let (suit, w, _) = grid(&[
+            "............",
+            "............",
+            "............",
+            "............",
+            "............",
+            "............",
+            "....####....",
+            "....####....",
+            "....####....",
+            "....####....",
+        ]);
+        let (expected, _, _) = grid(&[
+            "............",
+            ".....##.....",
+            "....####....",
+            "....####....",
+            "....####....",
+            "....####....",
+            "............",
+            "............",
+            "............",
+            "............",
+        ]);
+        let mut head = Vec::new();
+        assert!(expected_head(&suit, w, 6, 0.25, &mut head));
+        assert_eq!(head, expected);
+        // No suit in the top rows named: nothing expected.
+        assert!(!expected_head(&suit, w, 1, 0.25, &mut head));
+        assert!(head.iter().all(|&h| !h));
     }
 
     #[test]
