@@ -107,9 +107,10 @@ enum Command {
         /// of 2026-12-05).
         #[arg(long)]
         part_memory: Option<f32>,
-        /// How many nats the last look for a head, in frames where none was found, leans towards
-        /// the part within the ellipse where the head is expected (default 6; 0 switches that look
-        /// off, as before the ninth session of 2026-12-06).
+        /// How many nats the last look for a head, in frames where less than a head's area was
+        /// found above the suit, leans towards the part within the ellipse where the head is
+        /// expected (default 6; 0 switches that look off, as before the ninth session of
+        /// 2026-12-06).
         #[arg(long)]
         head_look: Option<f32>,
         /// Share of the person's own head and shoe colours, learned from the frames before, in the

@@ -12,8 +12,9 @@
 //! only ([`PixelBox`]), with the same result as on the whole grid. [`remove_large_off_cloth`] takes
 //! out the pieces of the region that are not cloth and too large for a marker. [`attach_parts`]
 //! then grows the suit into a band around it ([`part_band`]) through pixels of a part's colour, in
-//! pieces shaped like a head, a hand or a shoe ([`PartLimits`]). The person mask goes to the
-//! refinement at full resolution.
+//! pieces shaped like a head, a hand or a shoe ([`PartLimits`]); [`expected_head`] marks where a
+//! head is expected above the suit, for a last look where none was found. The person mask goes to
+//! the refinement at full resolution.
 
 use crate::mask::bounding_box_of;
 
@@ -449,7 +450,7 @@ pub fn part_bands(
 pub const ROUND_FILL: f32 = 0.6;
 
 /// Where a head is expected above the suit, for the head look of a frame whose part test found
-/// none ([`expected_head`]), in cm on the person: an ellipse 16 cm wide and 24 cm tall (a head
+/// less than a head above it ([`expected_head`]), in cm on the person: an ellipse 16 cm wide and 24 cm tall (a head
 /// with its neck; adults' head breadth is about 15 cm and chin to crown about 23 cm), reaching
 /// [`HEAD_OVERLAP_CM`] into the suit's top rows, above the middle of the suit's top
 /// [`NECK_ROWS_CM`].
@@ -476,7 +477,7 @@ pub fn expected_head(
 ) -> bool {
     head.clear();
     head.resize(suit.len(), false);
-    if width == 0 || !(px_per_cm > 0.0) {
+    if width == 0 || px_per_cm.is_nan() || px_per_cm <= 0.0 {
         return false;
     }
     let height = suit.len() / width;
