@@ -450,10 +450,10 @@ pub fn part_bands(
 pub const ROUND_FILL: f32 = 0.6;
 
 /// Where a head is expected above the suit, for the head look of a frame whose part test found
-/// less than a head above it ([`expected_head`]), in cm on the person: an ellipse 16 cm wide and 24 cm tall (a head
-/// with its neck; adults' head breadth is about 15 cm and chin to crown about 23 cm), reaching
-/// [`HEAD_OVERLAP_CM`] into the suit's top rows, above the middle of the suit's top
-/// [`NECK_ROWS_CM`].
+/// less than a head above it ([`expected_head`]), in cm on the person: an ellipse 16 cm wide and
+/// 24 cm tall (a head with its neck; adults' head breadth is about 15 cm and chin to crown about
+/// 23 cm), reaching [`HEAD_OVERLAP_CM`] into the suit's top rows, above the middle of the suit's
+/// top [`NECK_ROWS_CM`].
 pub const HEAD_HALF_WIDTH_CM: f32 = 8.0;
 /// See [`HEAD_HALF_WIDTH_CM`].
 pub const HEAD_HALF_HEIGHT_CM: f32 = 12.0;

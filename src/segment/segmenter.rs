@@ -39,10 +39,11 @@
 //!    ([`SegmenterOptions::part_memory`]), so a head over a room of its colour is not lost every
 //!    other frame; where less than a head's area was found above the suit, a last look floods
 //!    only the ellipse where a head is expected above the suit's top rows, the part test leaning
-//!    towards the part there ([`SegmenterOptions::head_look`]); and the part test's colours mix the trained table (every training subject's
-//!    skin and shoes) with this person's own, learned from the heads and shoes attached in the
-//!    frames before ([`SegmenterOptions::part_colour_share`]), the hands' test within the suit's
-//!    rows more than the head's and shoes' ([`SegmenterOptions::hand_colour_share`]);
+//!    towards the part there ([`SegmenterOptions::head_look`]); and the part test's colours mix
+//!    the trained table (every training subject's skin and shoes) with this person's own,
+//!    learned from the heads and shoes attached in the frames before
+//!    ([`SegmenterOptions::part_colour_share`]), the hands' test within the suit's rows more than
+//!    the head's and shoes' ([`SegmenterOptions::hand_colour_share`]);
 //! 5. upsamples to the frame's size and decides the pixels of the boundary band at full resolution from
 //!    their own colour and the upsampled cut; then moves the outline onto the frame's colour edge
 //!    in up to four passes, a marker-coloured outline pixel staying person unless the room beside
@@ -352,8 +353,9 @@ pub struct Segmenter {
     grown_rows: Vec<bool>,
     /// Where a head is expected above this frame's suit ([`SegmenterOptions::head_look`]).
     head_prior: Vec<bool>,
-    /// The head look's person and parts.
+    /// The head look's person and parts, and its band (the part band within `head_prior`).
     head_parts: (Vec<bool>, Vec<bool>),
+    head_band: Vec<bool>,
     /// The person and parts found without the memory, where the memory's pass took back a head.
     plain_parts: (Vec<bool>, Vec<bool>),
     /// The person and parts of the narrow band's pass (see [`attach_parts_narrowing`]).
@@ -549,6 +551,7 @@ impl Segmenter {
             grown_rows: Vec::new(),
             head_prior: Vec::new(),
             head_parts: (Vec::new(), Vec::new()),
+            head_band: Vec::new(),
             plain_parts: (Vec::new(), Vec::new()),
             narrow_parts: (Vec::new(), Vec::new()),
             stack: Vec::new(),
@@ -1001,15 +1004,16 @@ impl Segmenter {
         } {
             let (head_person, head_part) = &mut self.head_parts;
             head_person.clone_from(&person);
-            let head_band: Vec<bool> = self
-                .band
-                .iter()
-                .zip(head_prior.iter())
-                .map(|(&b, &e)| b && e)
-                .collect();
+            self.head_band.clear();
+            self.head_band.extend(
+                self.band
+                    .iter()
+                    .zip(head_prior.iter())
+                    .map(|(&b, &e)| b && e),
+            );
             attach_parts(
                 head_person,
-                &head_band,
+                &self.head_band,
                 w,
                 h,
                 part_like_looking(memory > 0.0, true),
