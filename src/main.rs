@@ -107,12 +107,12 @@ enum Command {
         /// of 2026-12-05).
         #[arg(long)]
         part_memory: Option<f32>,
-        /// How many nats the last look for a head, in frames where less than a head's area was
-        /// found above the suit, leans towards the part within the ellipse where the head is
-        /// expected (default 6; 0 switches that look off, as before the ninth session of
-        /// 2026-12-06).
+        /// How many nats the last look for a head and shoes, in frames where less than their
+        /// area was found above or below the suit, leans towards the part within the ellipses
+        /// where they are expected (default 6; 0 switches that look off, as before the ninth
+        /// session of 2026-12-06).
         #[arg(long)]
-        head_look: Option<f32>,
+        part_look: Option<f32>,
         /// Share of the person's own head and shoe colours, learned from the frames before, in the
         /// part test (default 0.3; 0 uses the trained part table alone, as before the ninth session
         /// of 2026-12-05).
@@ -519,11 +519,11 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
     Ok(Some(png_names_of_frames(Path::new(input))?))
 }
 
-/// The segmenter's options with `suitcap segment`'s overrides of the part memory and the head
-/// look (nats), the share of the person's own part colours, the edge snapping's room share for
+/// The segmenter's options with `suitcap segment`'s overrides of the part memory and the last
+/// look for a head and shoes (nats), the share of the person's own part colours, the edge snapping's room share for
 /// marker colours and the room model (`no_room`: off).
 fn segmenter_options(
-    (part_memory, head_look): (Option<f32>, Option<f32>),
+    (part_memory, part_look): (Option<f32>, Option<f32>),
     part_colours: Option<f32>,
     keep_room_share: Option<f32>,
     no_room: bool,
@@ -538,11 +538,11 @@ fn segmenter_options(
         }
         options.part_memory = nats;
     }
-    if let Some(nats) = head_look {
+    if let Some(nats) = part_look {
         if !(nats.is_finite() && nats >= 0.0) {
-            bail!("--head-look: {nats} is not a finite number >= 0");
+            bail!("--part-look: {nats} is not a finite number >= 0");
         }
-        options.head_look = nats;
+        options.part_look = nats;
     }
     if let Some(share) = part_colours {
         if !(0.0..=1.0).contains(&share) {
@@ -956,14 +956,14 @@ fn main() -> ExitCode {
             truth,
             weights,
             part_memory,
-            head_look,
+            part_look,
             part_colours,
             keep_room_share,
             no_room,
             dump_graph,
             graph_out,
         } => segmenter_options(
-            (*part_memory, *head_look),
+            (*part_memory, *part_look),
             *part_colours,
             *keep_room_share,
             *no_room,

@@ -12,8 +12,9 @@
 //! only ([`PixelBox`]), with the same result as on the whole grid. [`remove_large_off_cloth`] takes
 //! out the pieces of the region that are not cloth and too large for a marker. [`attach_parts`]
 //! then grows the suit into a band around it ([`part_band`]) through pixels of a part's colour, in
-//! pieces shaped like a head, a hand or a shoe ([`PartLimits`]); [`expected_head`] marks where a
-//! head is expected above the suit, for a last look where none was found. The person mask goes to
+//! pieces shaped like a head, a hand or a shoe ([`PartLimits`]); [`expected_head`] and
+//! [`expected_shoes`] mark where a head is expected above the suit and shoes below it, for a last
+//! look where less was found. The person mask goes to
 //! the refinement at full resolution.
 
 use crate::mask::bounding_box_of;
@@ -502,6 +503,86 @@ pub fn expected_head(
         HEAD_HALF_HEIGHT_CM * px_per_cm,
     );
     let cy = top as f32 + HEAD_OVERLAP_CM * px_per_cm - b;
+    mark_ellipse(suit, width, (cx, cy), (a, b), head)
+}
+
+/// Where shoes are expected below the suit, for the look of a frame whose part test found less
+/// than that below it ([`expected_shoes`]), in cm on the person: an ellipse 16 cm wide and 12 cm
+/// tall (a shoe seen from the front, the side or between) centred [`SHOE_DROP_CM`] below the
+/// lowest suit pixel of each run of columns that the suit's bottom [`ANKLE_ROWS_CM`] cover (a
+/// leg's end, or two legs side by side).
+pub const SHOE_HALF_WIDTH_CM: f32 = 8.0;
+/// See [`SHOE_HALF_WIDTH_CM`].
+pub const SHOE_HALF_HEIGHT_CM: f32 = 6.0;
+/// How far below the suit's lowest pixel of a leg the expected shoe's centre lies, cm.
+pub const SHOE_DROP_CM: f32 = 2.0;
+/// The suit's bottom rows whose pixels place the ankles.
+pub const ANKLE_ROWS_CM: f32 = 6.0;
+
+/// Marks in `shoes` (resized to the grid) the pixels outside `suit` where shoes are expected: for
+/// each run of adjacent columns holding suit in the rows of the suit's bottom [`ANKLE_ROWS_CM`]
+/// (above `bottom`, the row after the suit's last), the ellipse of [`SHOE_HALF_WIDTH_CM`] ×
+/// [`SHOE_HALF_HEIGHT_CM`] centred on the run's middle column, [`SHOE_DROP_CM`] below its lowest
+/// suit pixel, at `px_per_cm` grid pixels per cm. Returns whether any pixel was marked.
+pub fn expected_shoes(
+    suit: &[bool],
+    width: usize,
+    bottom: usize,
+    px_per_cm: f32,
+    shoes: &mut Vec<bool>,
+) -> bool {
+    shoes.clear();
+    shoes.resize(suit.len(), false);
+    if width == 0 || px_per_cm.is_nan() || px_per_cm <= 0.0 {
+        return false;
+    }
+    let height = suit.len() / width;
+    let rows = (ANKLE_ROWS_CM * px_per_cm).ceil().max(1.0) as usize;
+    // Each column's lowest suit row within the ankle rows.
+    let mut lowest: Vec<Option<usize>> = vec![None; width];
+    for y in bottom.saturating_sub(rows)..bottom.min(height) {
+        for (x, low) in lowest.iter_mut().enumerate() {
+            if suit[y * width + x] {
+                *low = Some(y);
+            }
+        }
+    }
+    let (a, b) = (
+        SHOE_HALF_WIDTH_CM * px_per_cm,
+        SHOE_HALF_HEIGHT_CM * px_per_cm,
+    );
+    let mut marked = false;
+    let mut x = 0;
+    while x < width {
+        let start = x;
+        let mut end_row = None;
+        while let Some(Some(y)) = lowest.get(x) {
+            end_row = end_row.max(Some(*y));
+            x += 1;
+        }
+        let Some(end_row) = end_row else {
+            x += 1;
+            continue;
+        };
+        let centre = (
+            (start + x - 1) as f32 / 2.0,
+            end_row as f32 + SHOE_DROP_CM * px_per_cm,
+        );
+        marked |= mark_ellipse(suit, width, centre, (a, b), shoes);
+    }
+    marked
+}
+
+/// Marks in `marks` the pixels outside `suit` within the ellipse of half axes `(a, b)` about
+/// `centre` (grid pixels); returns whether it marked any.
+fn mark_ellipse(
+    suit: &[bool],
+    width: usize,
+    (cx, cy): (f32, f32),
+    (a, b): (f32, f32),
+    marks: &mut [bool],
+) -> bool {
+    let height = suit.len() / width;
     let span = |centre: f32, half: f32, limit: usize| {
         let lo = (centre - half).floor().max(0.0) as usize;
         let hi = ((centre + half).ceil() + 1.0).clamp(0.0, limit as f32) as usize;
@@ -513,7 +594,7 @@ pub fn expected_head(
             let (dx, dy) = ((x as f32 - cx) / a, (y as f32 - cy) / b);
             let i = y * width + x;
             if dx * dx + dy * dy <= 1.0 && !suit[i] {
-                head[i] = true;
+                marks[i] = true;
                 marked = true;
             }
         }
@@ -797,6 +878,44 @@ mod tests {
         // No suit in the top rows named: nothing expected.
         assert!(!expected_head(&suit, w, 1, 0.25, &mut head));
         assert!(head.iter().all(|&h| !h));
+    }
+
+    #[test]
+    fn the_expected_shoes_are_ellipses_below_each_legs_lowest_suit_pixel() {
+        // Legs in columns 2–3 and 8–10 down to row 5 (bottom 6); at 0.25 px per cm the ankle
+        // rows are 4–5, the ellipses 2 × 1.5 px (half axes) about (2.5, 5.5) and (9, 5.5). Rows
+        // 5 and 6: (0.5/1.5)² = 0.11 leaves |x − centre| ≤ 2·√0.89 = 1.89; rows 4 and 7 only the
+        // centre column, which only the right leg has (row 4 is its suit).
+        let (suit, w, _) = grid(&[
+            "..##....###...",
+            "..##....###...",
+            "..##....###...",
+            "..##....###...",
+            "..##....###...",
+            "..##....###...",
+            "..............",
+            "..............",
+            "..............",
+            "..............",
+        ]);
+        let (expected, _, _) = grid(&[
+            "..............",
+            "..............",
+            "..............",
+            "..............",
+            "..............",
+            ".#..#.........",
+            ".####...###...",
+            ".........#....",
+            "..............",
+            "..............",
+        ]);
+        let mut shoes = Vec::new();
+        assert!(expected_shoes(&suit, w, 6, 0.25, &mut shoes));
+        assert_eq!(shoes, expected);
+        // No suit in the ankle rows: nothing expected.
+        assert!(!expected_shoes(&suit, w, 9, 0.25, &mut shoes));
+        assert!(shoes.iter().all(|&s| !s));
     }
 
     #[test]

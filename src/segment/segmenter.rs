@@ -37,9 +37,10 @@
 //!    ([`SegmenterOptions::part_reach_narrow`]); where the previous frame attached a head or
 //!    shoes, the part test leans towards the part
 //!    ([`SegmenterOptions::part_memory`]), so a head over a room of its colour is not lost every
-//!    other frame; where less than a head's area was found above the suit, a last look floods
-//!    only the ellipse where a head is expected above the suit's top rows, the part test leaning
-//!    towards the part there ([`SegmenterOptions::head_look`]); and the part test's colours mix
+//!    other frame; where less than a head's area was found above the suit, or less than the
+//!    shoes' below it, a last look floods only the ellipses where they are expected (above the
+//!    suit's top rows, below each leg's end), the part test leaning towards the part there
+//!    ([`SegmenterOptions::part_look`]); and the part test's colours mix
 //!    the trained table (every training subject's skin and shoes) with this person's own,
 //!    learned from the heads and shoes attached in the frames before
 //!    ([`SegmenterOptions::part_colour_share`]), the hands' test within the suit's rows more than
@@ -59,8 +60,8 @@ use image::RgbImage;
 
 use super::cleanup::{
     add_parts, attach_parts, attach_parts_narrowing, clean, distance_near, expected_head,
-    part_bands, region_height, remove_large_off_cloth, CleanupReport, PartLimits, PixelBox,
-    RegionRule, ATTACH_REACH, PART_REACH,
+    expected_shoes, part_bands, region_height, remove_large_off_cloth, CleanupReport, PartLimits,
+    PixelBox, RegionRule, ATTACH_REACH, PART_REACH,
 };
 use super::features::{
     colour_index, contrast_bin, downscale, is_near_pattern, is_suit_pattern, temporal_bin,
@@ -169,24 +170,29 @@ pub struct SegmenterOptions {
     /// a few frames (a star's halo joined to a head for two frames, then both dropped in the
     /// third, in `scripts/eval_segmenter.sh`'s walk).
     pub part_memory: f32,
-    /// Nats by which the part test favours the part within the ellipse where a head is expected
-    /// ([`expected_head`]: above the middle of the suit's top rows, sized by the suit's height),
-    /// in a last look for the head in frames where the other passes attached fewer pixels above
-    /// the suit's top row than that ellipse holds (0: no such look). The look floods from the
-    /// suit through the band's pixels within the ellipse only, under the same part limits, and
+    /// Nats by which the part test favours the part within the ellipses where a head and shoes
+    /// are expected ([`expected_head`]: above the middle of the suit's top rows;
+    /// [`expected_shoes`]: below each leg's end; sized by the suit's height), in a last look in
+    /// frames where the other passes attached fewer pixels above the suit's top row, or below its
+    /// bottom row, than those ellipses hold (0: no such look). The look floods from the suit
+    /// through the band's pixels within the lacking ellipses only, under the same part limits, and
     /// adds what it finds. Over a room with much of a skin's colour (cat fur, coffee, an orange)
     /// the online background makes the head likelier background than part, and where the head
     /// touches such background the piece grows too large for a head and is taken back: a dance
-    /// over the cat photograph lost its head in most frames. Chosen on the nine selection
-    /// renderings (mean IoU; the three validation sequences of `scripts/eval_segmenter.sh`
-    /// 0.9601 without the look, 0.9606–0.9607 with any of these): off 0.9673; looking only where
-    /// nothing was found above the top row, 3 / 6 / 12 nats 0.9674 / 0.9674 / 0.9673; where less
-    /// than the ellipse was found, 3 / **6** / 12 nats 0.9675 / **0.9680** / 0.9667 (less than
-    /// half or one and a half times the ellipse at 6 nats: 0.9675, 0.9675; three times 0.9625).
-    /// Placing the ellipse where the part test scores best, within half a head of the neck, lost
-    /// heads to dark pupils and shadows (the dance of the pose test sequences 0.8734 → 0.8635),
-    /// so it stays above the neck (docs/measurements.md, ninth session of 2026-12-06).
-    pub head_look: f32,
+    /// over the cat photograph lost its head in most frames; dark shoes over a dark hedge were
+    /// never flooded (a walk lost them in most frames). Chosen on the nine selection renderings
+    /// (mean IoU; the three validation sequences of `scripts/eval_segmenter.sh` after the slash):
+    /// off 0.9673 / 0.9601. Heads only: where nothing was found above the top row, 3 / 6 / 12
+    /// nats 0.9674 / 0.9674 / 0.9673 (0.9606 each); where less than the ellipse was found, 3 /
+    /// **6** / 12 nats 0.9675 / **0.9680** / 0.9667 (0.9607 each; less than half or one and a
+    /// half times the ellipse at 6 nats 0.9675, 0.9675; three times 0.9625). Shoes too, at 6
+    /// nats: **0.9682 / 0.9671**; shoe ellipses 12 or 20 cm wide 0.9680 / 0.9670, 0.9674 / 0.9673,
+    /// 8 or 16 cm tall 0.9682 / 0.9665, 0.9679 / 0.9671, 0 or 4 cm below the leg 0.9680 /
+    /// 0.9663, 0.9677 / 0.9677, ankle rows of 3 or 10 cm 0.9680 / 0.9669, 0.9681 / 0.9682.
+    /// Placing the head's ellipse where the part test scores best, within half a head of the
+    /// neck, lost heads to dark pupils and shadows (the dance of the pose test sequences 0.8734 →
+    /// 0.8635), so it stays above the neck (docs/measurements.md, ninth session of 2026-12-06).
+    pub part_look: f32,
     /// Share of the person's own head and shoe colours in the part test's colour likelihood (0:
     /// the trained part table alone, as before the ninth session of 2026-12-05). The trained
     /// table holds every training subject's skin, hair and shoes, so a background of any skin's
@@ -253,7 +259,7 @@ impl Default for SegmenterOptions {
             part_max_side_depth: 0.3,
             off_cloth_max_markers: 4.0,
             part_memory: 1.5,
-            head_look: 6.0,
+            part_look: 6.0,
             part_colour_share: 0.3,
             hand_colour_share: 0.75,
             part_colour_rate: 0.3,
@@ -351,11 +357,13 @@ pub struct Segmenter {
     /// [`PART_MEMORY_RADIUS`] (empty: none), and the row pass's scratch.
     previous_parts: Vec<bool>,
     grown_rows: Vec<bool>,
-    /// Where a head is expected above this frame's suit ([`SegmenterOptions::head_look`]).
+    /// Where a head is expected above this frame's suit and shoes below it
+    /// ([`SegmenterOptions::part_look`]).
     head_prior: Vec<bool>,
-    /// The head look's person and parts, and its band (the part band within `head_prior`).
-    head_parts: (Vec<bool>, Vec<bool>),
-    head_band: Vec<bool>,
+    shoe_prior: Vec<bool>,
+    /// The last look's person and parts, and its band (the part band within the priors).
+    look_parts: (Vec<bool>, Vec<bool>),
+    look_band: Vec<bool>,
     /// The person and parts found without the memory, where the memory's pass took back a head.
     plain_parts: (Vec<bool>, Vec<bool>),
     /// The person and parts of the narrow band's pass (see [`attach_parts_narrowing`]).
@@ -550,8 +558,9 @@ impl Segmenter {
             previous_parts: Vec::new(),
             grown_rows: Vec::new(),
             head_prior: Vec::new(),
-            head_parts: (Vec::new(), Vec::new()),
-            head_band: Vec::new(),
+            shoe_prior: Vec::new(),
+            look_parts: (Vec::new(), Vec::new()),
+            look_band: Vec::new(),
             plain_parts: (Vec::new(), Vec::new()),
             narrow_parts: (Vec::new(), Vec::new()),
             stack: Vec::new(),
@@ -924,18 +933,29 @@ impl Segmenter {
         };
         let previous_parts = &self.previous_parts;
         let room_seen = &self.room_seen;
-        // Where a head is expected, for the head look below.
-        let head_look = self.options.head_look;
-        let head_expected = head_look > 0.0
-            && !suit_rows.is_empty()
-            && expected_head(
-                &labels,
-                w,
-                suit_rows.start,
-                suit_rows.len() as f32 / PERSON_HEIGHT_CM,
-                &mut self.head_prior,
-            );
-        let head_prior = &self.head_prior;
+        // Where a head and shoes are expected, for the last look below.
+        let part_look = self.options.part_look;
+        let px_per_cm = suit_rows.len() as f32 / PERSON_HEIGHT_CM;
+        let looking_for = |expected: bool, prior: &mut Vec<bool>| {
+            if !expected {
+                prior.clear();
+                prior.resize(w * h, false);
+            }
+            expected
+        };
+        let head_expected = looking_for(
+            part_look > 0.0
+                && !suit_rows.is_empty()
+                && expected_head(&labels, w, suit_rows.start, px_per_cm, &mut self.head_prior),
+            &mut self.head_prior,
+        );
+        let shoes_expected = looking_for(
+            part_look > 0.0
+                && !suit_rows.is_empty()
+                && expected_shoes(&labels, w, suit_rows.end, px_per_cm, &mut self.shoe_prior),
+            &mut self.shoe_prior,
+        );
+        let (head_prior, shoe_prior) = (&self.head_prior, &self.shoe_prior);
         let part_like_looking = |remember: bool, looking: bool| {
             move |i: usize| {
                 if room_seen[i] {
@@ -946,8 +966,8 @@ impl Segmenter {
                     memory
                 } else {
                     0.0
-                } + if looking && head_prior[i] {
-                    head_look
+                } + if looking && (head_prior[i] || shoe_prior[i]) {
+                    part_look
                 } else {
                     0.0
                 };
@@ -996,32 +1016,36 @@ impl Segmenter {
             );
             attached.added += add_parts(&mut person, &mut self.part, plain_part);
         }
-        // Less found above the suit's top row than a head's area: a last look for the head
-        // within the ellipse where it is expected.
-        if head_expected && {
-            let found = self.part[..suit_rows.start * w].iter().filter(|&&p| p);
-            found.count() < head_prior.iter().filter(|&&e| e).count()
-        } {
-            let (head_person, head_part) = &mut self.head_parts;
-            head_person.clone_from(&person);
-            self.head_band.clear();
-            self.head_band.extend(
+        // Less found above the suit's top row than a head's area, or below its bottom row than
+        // the shoes': a last look for them within the ellipses where they are expected.
+        let lacking = |expected: bool, found: &[bool], prior: &[bool]| {
+            expected && found.iter().filter(|&&p| p).count() < prior.iter().filter(|&&e| e).count()
+        };
+        let (above, below) = self.part.split_at(suit_rows.start * w);
+        let below = &below[(suit_rows.len() * w).min(below.len())..];
+        let look_head = lacking(head_expected, above, head_prior);
+        let look_shoes = lacking(shoes_expected, below, shoe_prior);
+        if look_head || look_shoes {
+            let (look_person, look_part) = &mut self.look_parts;
+            look_person.clone_from(&person);
+            self.look_band.clear();
+            self.look_band.extend(
                 self.band
                     .iter()
-                    .zip(head_prior.iter())
-                    .map(|(&b, &e)| b && e),
+                    .zip(head_prior.iter().zip(shoe_prior.iter()))
+                    .map(|(&b, (&head, &shoe))| b && ((look_head && head) || (look_shoes && shoe))),
             );
             attach_parts(
-                head_person,
-                &self.head_band,
+                look_person,
+                &self.look_band,
                 w,
                 h,
                 part_like_looking(memory > 0.0, true),
                 limits,
-                head_part,
+                look_part,
                 &mut self.stack,
             );
-            attached.added += add_parts(&mut person, &mut self.part, head_part);
+            attached.added += add_parts(&mut person, &mut self.part, look_part);
         }
         // The head and the shoes: the parts above the suit's top row and below its bottom row
         // (none with nobody in the frame). On a stream's first frame, segmented twice, the second
