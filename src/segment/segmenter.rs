@@ -936,25 +936,12 @@ impl Segmenter {
         // Where a head and shoes are expected, for the last look below.
         let part_look = self.options.part_look;
         let px_per_cm = suit_rows.len() as f32 / PERSON_HEIGHT_CM;
-        let looking_for = |expected: bool, prior: &mut Vec<bool>| {
-            if !expected {
-                prior.clear();
-                prior.resize(w * h, false);
-            }
-            expected
-        };
-        let head_expected = looking_for(
-            part_look > 0.0
-                && !suit_rows.is_empty()
-                && expected_head(&labels, w, suit_rows.start, px_per_cm, &mut self.head_prior),
-            &mut self.head_prior,
-        );
-        let shoes_expected = looking_for(
-            part_look > 0.0
-                && !suit_rows.is_empty()
-                && expected_shoes(&labels, w, suit_rows.end, px_per_cm, &mut self.shoe_prior),
-            &mut self.shoe_prior,
-        );
+        // Both are made (grid-sized) whenever either can be looked for.
+        let looking = part_look > 0.0 && !suit_rows.is_empty();
+        let head_expected =
+            looking && expected_head(&labels, w, suit_rows.start, px_per_cm, &mut self.head_prior);
+        let shoes_expected =
+            looking && expected_shoes(&labels, w, suit_rows.end, px_per_cm, &mut self.shoe_prior);
         let (head_prior, shoe_prior) = (&self.head_prior, &self.shoe_prior);
         let part_like_looking = |remember: bool, looking: bool| {
             move |i: usize| {
