@@ -937,11 +937,11 @@ impl Segmenter {
         let part_look = self.options.part_look;
         let px_per_cm = suit_rows.len() as f32 / PERSON_HEIGHT_CM;
         // Both are made (grid-sized) whenever either can be looked for.
-        let looking = part_look > 0.0 && !suit_rows.is_empty();
+        let may_look = part_look > 0.0 && !suit_rows.is_empty();
         let head_expected =
-            looking && expected_head(&labels, w, suit_rows.start, px_per_cm, &mut self.head_prior);
+            may_look && expected_head(&labels, w, suit_rows.start, px_per_cm, &mut self.head_prior);
         let shoes_expected =
-            looking && expected_shoes(&labels, w, suit_rows.end, px_per_cm, &mut self.shoe_prior);
+            may_look && expected_shoes(&labels, w, suit_rows.end, px_per_cm, &mut self.shoe_prior);
         let (head_prior, shoe_prior) = (&self.head_prior, &self.shoe_prior);
         let part_like_looking = |remember: bool, looking: bool| {
             move |i: usize| {
