@@ -476,12 +476,9 @@ pub fn expected_head(
     px_per_cm: f32,
     head: &mut Vec<bool>,
 ) -> bool {
-    head.clear();
-    head.resize(suit.len(), false);
-    if width == 0 || px_per_cm.is_nan() || px_per_cm <= 0.0 {
+    let Some(height) = start_marks(suit, width, px_per_cm, head) else {
         return false;
-    }
-    let height = suit.len() / width;
+    };
     let neck_rows = top..(top + (NECK_ROWS_CM * px_per_cm).ceil().max(1.0) as usize).min(height);
     let (mut sum, mut count) = (0.0f64, 0usize);
     for y in neck_rows {
@@ -533,12 +530,9 @@ pub fn expected_shoes(
     px_per_cm: f32,
     shoes: &mut Vec<bool>,
 ) -> bool {
-    shoes.clear();
-    shoes.resize(suit.len(), false);
-    if width == 0 || px_per_cm.is_nan() || px_per_cm <= 0.0 {
+    let Some(height) = start_marks(suit, width, px_per_cm, shoes) else {
         return false;
-    }
-    let height = suit.len() / width;
+    };
     let rows = (ANKLE_ROWS_CM * px_per_cm).ceil().max(1.0) as usize;
     // Each column's lowest suit row within the ankle rows.
     let mut lowest: Vec<Option<usize>> = vec![None; width];
@@ -578,6 +572,19 @@ pub fn expected_shoes(
         marked |= mark_ellipse(suit, width, centre, (a, b), shoes);
     }
     marked
+}
+
+/// Clears `marks` to the grid's size; returns the grid's height, or `None` when there is nothing
+/// to mark (no width, or no pixels per cm).
+fn start_marks(
+    suit: &[bool],
+    width: usize,
+    px_per_cm: f32,
+    marks: &mut Vec<bool>,
+) -> Option<usize> {
+    marks.clear();
+    marks.resize(suit.len(), false);
+    (width > 0 && px_per_cm > 0.0).then(|| suit.len() / width)
 }
 
 /// Marks in `marks` the pixels outside `suit` within the ellipse of half axes `(a, b)` about
