@@ -468,16 +468,16 @@ pub const NECK_ROWS_CM: f32 = 8.0;
 /// ellipse of [`HEAD_HALF_WIDTH_CM`] × [`HEAD_HALF_HEIGHT_CM`] centred above the mean column of
 /// the suit's pixels in its top [`NECK_ROWS_CM`], reaching [`HEAD_OVERLAP_CM`] into the suit's
 /// top row `top`, at `px_per_cm` grid pixels per cm. Image up is taken as the person's up, as the
-/// part limits take it. Returns whether any pixel was marked (none without suit in its top rows).
+/// part limits take it. Returns how many pixels were marked (none without suit in its top rows).
 pub fn expected_head(
     suit: &[bool],
     width: usize,
     top: usize,
     px_per_cm: f32,
     head: &mut Vec<bool>,
-) -> bool {
+) -> usize {
     let Some(height) = start_marks(suit, width, px_per_cm, head) else {
-        return false;
+        return 0;
     };
     let neck_rows = top..(top + (NECK_ROWS_CM * px_per_cm).ceil().max(1.0) as usize).min(height);
     let (mut sum, mut count) = (0.0f64, 0usize);
@@ -492,7 +492,7 @@ pub fn expected_head(
         }
     }
     if count == 0 {
-        return false;
+        return 0;
     }
     let cx = (sum / count as f64) as f32;
     let (a, b) = (
@@ -522,16 +522,17 @@ pub const ANKLE_ROWS_CM: f32 = 6.0;
 /// [`SHOE_HALF_HEIGHT_CM`] centred on the run's middle column, [`SHOE_DROP_CM`] below its lowest
 /// suit pixel, at `px_per_cm` grid pixels per cm, unless the ellipse reaches the grid's bottom
 /// row (a foot at the frame's edge: on CMU kick 10_03 of the pose test sequences the look took in
-/// the lens flares under such feet, 0.9871 → 0.9785 IoU). Returns whether any pixel was marked.
+/// the lens flares under such feet, 0.9871 → 0.9785 IoU). Returns how many pixels were marked
+/// (where two ellipses overlap, once).
 pub fn expected_shoes(
     suit: &[bool],
     width: usize,
     bottom: usize,
     px_per_cm: f32,
     shoes: &mut Vec<bool>,
-) -> bool {
+) -> usize {
     let Some(height) = start_marks(suit, width, px_per_cm, shoes) else {
-        return false;
+        return 0;
     };
     let rows = (ANKLE_ROWS_CM * px_per_cm).ceil().max(1.0) as usize;
     // Each column's lowest suit row within the ankle rows.
@@ -547,7 +548,7 @@ pub fn expected_shoes(
         SHOE_HALF_WIDTH_CM * px_per_cm,
         SHOE_HALF_HEIGHT_CM * px_per_cm,
     );
-    let mut marked = false;
+    let mut marked = 0;
     let mut x = 0;
     while x < width {
         let start = x;
@@ -569,7 +570,7 @@ pub fn expected_shoes(
         if centre.1 + b >= height as f32 {
             continue;
         }
-        marked |= mark_ellipse(suit, width, centre, (a, b), shoes);
+        marked += mark_ellipse(suit, width, centre, (a, b), shoes);
     }
     marked
 }
@@ -588,28 +589,28 @@ fn start_marks(
 }
 
 /// Marks in `marks` the pixels outside `suit` within the ellipse of half axes `(a, b)` about
-/// `centre` (grid pixels); returns whether it marked any.
+/// `centre` (grid pixels); returns how many it marked that were not marked before.
 fn mark_ellipse(
     suit: &[bool],
     width: usize,
     (cx, cy): (f32, f32),
     (a, b): (f32, f32),
     marks: &mut [bool],
-) -> bool {
+) -> usize {
     let height = suit.len() / width;
     let span = |centre: f32, half: f32, limit: usize| {
         let lo = (centre - half).floor().max(0.0) as usize;
         let hi = ((centre + half).ceil() + 1.0).clamp(0.0, limit as f32) as usize;
         lo..hi.max(lo)
     };
-    let mut marked = false;
+    let mut marked = 0;
     for y in span(cy, b, height) {
         for x in span(cx, a, width) {
             let (dx, dy) = ((x as f32 - cx) / a, (y as f32 - cy) / b);
             let i = y * width + x;
-            if dx * dx + dy * dy <= 1.0 && !suit[i] {
+            if dx * dx + dy * dy <= 1.0 && !suit[i] && !marks[i] {
                 marks[i] = true;
-                marked = true;
+                marked += 1;
             }
         }
     }
@@ -887,10 +888,10 @@ mod tests {
             "............",
         ]);
         let mut head = Vec::new();
-        assert!(expected_head(&suit, w, 6, 0.25, &mut head));
+        assert_eq!(expected_head(&suit, w, 6, 0.25, &mut head), 18);
         assert_eq!(head, expected);
         // No suit in the top rows named: nothing expected.
-        assert!(!expected_head(&suit, w, 1, 0.25, &mut head));
+        assert_eq!(expected_head(&suit, w, 1, 0.25, &mut head), 0);
         assert!(head.iter().all(|&h| !h));
     }
 
@@ -925,10 +926,10 @@ mod tests {
             "..............",
         ]);
         let mut shoes = Vec::new();
-        assert!(expected_shoes(&suit, w, 6, 0.25, &mut shoes));
+        assert_eq!(expected_shoes(&suit, w, 6, 0.25, &mut shoes), 10);
         assert_eq!(shoes, expected);
         // No suit in the ankle rows: nothing expected.
-        assert!(!expected_shoes(&suit, w, 9, 0.25, &mut shoes));
+        assert_eq!(expected_shoes(&suit, w, 9, 0.25, &mut shoes), 0);
         assert!(shoes.iter().all(|&s| !s));
         // Legs down to row 8 of 10: the ellipses (centre row 8.5, half height 1.5) reach the
         // bottom row, so nothing is expected.
@@ -944,7 +945,7 @@ mod tests {
             "..##....###...",
             "..............",
         ]);
-        assert!(!expected_shoes(&tall, w, 9, 0.25, &mut shoes));
+        assert_eq!(expected_shoes(&tall, w, 9, 0.25, &mut shoes), 0);
         assert!(shoes.iter().all(|&s| !s));
     }
 

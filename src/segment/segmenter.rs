@@ -936,12 +936,17 @@ impl Segmenter {
         // Where a head and shoes are expected, for the last look below.
         let part_look = self.options.part_look;
         let px_per_cm = suit_rows.len() as f32 / PERSON_HEIGHT_CM;
-        // Both are made (grid-sized) whenever either can be looked for.
+        // Both are made (grid-sized) whenever either can be looked for; how many pixels each
+        // expects (0: none, or no look).
         let may_look = part_look > 0.0 && !suit_rows.is_empty();
-        let head_expected =
-            may_look && expected_head(&labels, w, suit_rows.start, px_per_cm, &mut self.head_prior);
-        let shoes_expected =
-            may_look && expected_shoes(&labels, w, suit_rows.end, px_per_cm, &mut self.shoe_prior);
+        let (head_expected, shoes_expected) = if may_look {
+            (
+                expected_head(&labels, w, suit_rows.start, px_per_cm, &mut self.head_prior),
+                expected_shoes(&labels, w, suit_rows.end, px_per_cm, &mut self.shoe_prior),
+            )
+        } else {
+            (0, 0)
+        };
         let (head_prior, shoe_prior) = (&self.head_prior, &self.shoe_prior);
         let part_like_looking = |remember: bool, looking: bool| {
             move |i: usize| {
@@ -1005,13 +1010,12 @@ impl Segmenter {
         }
         // Less found above the suit's top row than a head's area, or below its bottom row than
         // the shoes': a last look for them within the ellipses where they are expected.
-        let lacking = |expected: bool, found: &[bool], prior: &[bool]| {
-            expected && found.iter().filter(|&&p| p).count() < prior.iter().filter(|&&e| e).count()
-        };
+        let lacking =
+            |found: &[bool], expected: usize| found.iter().filter(|&&p| p).count() < expected;
         let (above, below) = self.part.split_at(suit_rows.start * w);
         let below = &below[(suit_rows.len() * w).min(below.len())..];
-        let look_head = lacking(head_expected, above, head_prior);
-        let look_shoes = lacking(shoes_expected, below, shoe_prior);
+        let look_head = lacking(above, head_expected);
+        let look_shoes = lacking(below, shoes_expected);
         if look_head || look_shoes {
             let (look_person, look_part) = &mut self.look_parts;
             look_person.clone_from(&person);
