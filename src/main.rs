@@ -520,8 +520,8 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
 }
 
 /// The segmenter's options with `suitcap segment`'s overrides of the part memory and the last
-/// look for a head and shoes (nats), the share of the person's own part colours, the edge snapping's room share for
-/// marker colours and the room model (`no_room`: off).
+/// look for a head and shoes (nats), the share of the person's own part colours, the edge
+/// snapping's room share for marker colours and the room model (`no_room`: off).
 fn segmenter_options(
     (part_memory, part_look): (Option<f32>, Option<f32>),
     part_colours: Option<f32>,
@@ -532,17 +532,21 @@ fn segmenter_options(
     if no_room {
         options.room = None;
     }
-    if let Some(nats) = part_memory {
-        if !(nats.is_finite() && nats >= 0.0) {
-            bail!("--part-memory: {nats} is not a finite number >= 0");
+    // `flag`'s value if it is finite and not negative, else an error naming the flag.
+    let at_least_zero = |flag: &str, value: f32, what: &str| {
+        if value.is_finite() && value >= 0.0 {
+            Ok(value)
+        } else {
+            Err(anyhow::anyhow!(
+                "{flag}: {value} is not a finite {what} >= 0"
+            ))
         }
-        options.part_memory = nats;
+    };
+    if let Some(nats) = part_memory {
+        options.part_memory = at_least_zero("--part-memory", nats, "number")?;
     }
     if let Some(nats) = part_look {
-        if !(nats.is_finite() && nats >= 0.0) {
-            bail!("--part-look: {nats} is not a finite number >= 0");
-        }
-        options.part_look = nats;
+        options.part_look = at_least_zero("--part-look", nats, "number")?;
     }
     if let Some(share) = part_colours {
         if !(0.0..=1.0).contains(&share) {
@@ -551,10 +555,7 @@ fn segmenter_options(
         options.part_colour_share = share;
     }
     if let Some(share) = keep_room_share {
-        if !(share.is_finite() && share >= 0.0) {
-            bail!("--keep-room-share: {share} is not a finite share >= 0");
-        }
-        options.snap.keep_room_share = share;
+        options.snap.keep_room_share = at_least_zero("--keep-room-share", share, "share")?;
     }
     Ok(options)
 }
