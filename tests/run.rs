@@ -386,6 +386,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
     for (name, extra) in [
         ("remembering", &[][..]),
         ("plain", &["--part-memory", "0"][..]),
+        ("no last look", &["--part-look", "0"][..]),
         ("trained colours", &["--part-colours", "0"][..]),
         ("marker colours kept", &["--keep-room-share", "2"][..]),
     ] {
@@ -398,6 +399,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
     let out = tmp.path().join("bad");
     for (bad, flag) in [
         (&["--part-memory=-1"][..], "--part-memory"),
+        (&["--part-look", "inf"][..], "--part-look"),
         (&["--part-colours", "1.5"][..], "--part-colours"),
         (&["--keep-room-share", "NaN"][..], "--keep-room-share"),
     ] {
