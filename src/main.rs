@@ -123,6 +123,11 @@ enum Command {
         /// keeps it always, as before the tenth session of 2026-12-05).
         #[arg(long)]
         keep_room_share: Option<f32>,
+        /// How far from the nearest marker the suit's cloth can be, in cm (default 24; 0: no
+        /// limit, as before the tenth session of 2026-12-06); farther cloth is a cloth-coloured
+        /// object touching the person.
+        #[arg(long)]
+        cloth_reach: Option<f32>,
         /// Without the room learned pixel by pixel (as before the second session of 2026-12-06;
         /// for comparisons).
         #[arg(long)]
@@ -521,11 +526,13 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
 
 /// The segmenter's options with `suitcap segment`'s overrides of the part memory and the last
 /// look for a head and shoes (nats), the share of the person's own part colours, the edge
-/// snapping's room share for marker colours and the room model (`no_room`: off).
+/// snapping's room share for marker colours, the cloth's reach from the markers (cm) and the
+/// room model (`no_room`: off).
 fn segmenter_options(
     (part_memory, part_look): (Option<f32>, Option<f32>),
     part_colours: Option<f32>,
     keep_room_share: Option<f32>,
+    cloth_reach: Option<f32>,
     no_room: bool,
 ) -> anyhow::Result<SegmenterOptions> {
     let mut options = SegmenterOptions::default();
@@ -556,6 +563,9 @@ fn segmenter_options(
     }
     if let Some(share) = keep_room_share {
         options.snap.keep_room_share = at_least_zero("--keep-room-share", share, "share")?;
+    }
+    if let Some(cm) = cloth_reach {
+        options.cloth_reach_cm = at_least_zero("--cloth-reach", cm, "number of cm")?;
     }
     Ok(options)
 }
@@ -593,8 +603,9 @@ fn segment(
     // Per frame scored against the truth: how the mask agrees with it, and the frame's name.
     let mut scored: Vec<(suitcap::mask::Agreement, String)> = Vec::new();
     let mut unscored = 0usize;
-    let (mut cleaned_frames, mut removed_px, mut filled_px, mut off_cloth_px, mut empty_frames) =
-        (0usize, 0usize, 0usize, 0usize, 0usize);
+    let (mut cleaned_frames, mut removed_px, mut filled_px, mut empty_frames) =
+        (0usize, 0usize, 0usize, 0usize);
+    let (mut off_cloth_px, mut far_px) = (0usize, 0usize);
     // The last frame's height, for the cut's factor in the summary.
     let mut last_height = None;
     loop {
@@ -620,11 +631,14 @@ fn segment(
         last_height = Some(frame.image.height());
         times.push(result.times);
         let c = result.cleanup;
-        if c.components_removed + c.holes_filled + c.off_cloth_pieces > 0 {
+        if c.components_removed + c.holes_filled + c.off_cloth_pieces + c.far_from_markers_pixels
+            > 0
+        {
             cleaned_frames += 1;
         }
         removed_px += c.pixels_removed;
         off_cloth_px += c.off_cloth_pixels;
+        far_px += c.far_from_markers_pixels;
         filled_px += c.pixels_filled;
         empty_frames += result.mask.is_empty() as usize;
         let path = out.join(&name);
@@ -657,8 +671,9 @@ fn segment(
     };
     println!(
         "clean-up (largest marker-carrying region kept, small holes filled, pieces not cloth and larger than a \
-         few markers removed) changed {cleaned_frames} frames: {removed_px} stray person pixels removed, \
-         {filled_px} hole pixels filled, {off_cloth_px} pixels of large pieces not cloth removed (on {grid})"
+         few markers removed, cloth far from every marker removed) changed {cleaned_frames} frames: \
+         {removed_px} stray person pixels removed, {filled_px} hole pixels filled, {off_cloth_px} pixels of \
+         large pieces not cloth removed, {far_px} pixels of cloth far from the markers removed (on {grid})"
     );
     if !times.is_empty() {
         let stage_median =
@@ -960,6 +975,7 @@ fn main() -> ExitCode {
             part_look,
             part_colours,
             keep_room_share,
+            cloth_reach,
             no_room,
             dump_graph,
             graph_out,
@@ -967,6 +983,7 @@ fn main() -> ExitCode {
             (*part_memory, *part_look),
             *part_colours,
             *keep_room_share,
+            *cloth_reach,
             *no_room,
         )
         .and_then(|options| {

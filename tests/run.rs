@@ -389,6 +389,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         ("no last look", &["--part-look", "0"][..]),
         ("trained colours", &["--part-colours", "0"][..]),
         ("marker colours kept", &["--keep-room-share", "2"][..]),
+        ("cloth anywhere", &["--cloth-reach", "0"][..]),
     ] {
         let out = tmp.path().join(name);
         let report = succeeded(segment(&out, &all_masks, extra));
@@ -402,6 +403,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         (&["--part-look", "inf"][..], "--part-look"),
         (&["--part-colours", "1.5"][..], "--part-colours"),
         (&["--keep-room-share", "NaN"][..], "--keep-room-share"),
+        (&["--cloth-reach=-24"][..], "--cloth-reach"),
     ] {
         let output = segment(&out, &all_masks, bad);
         assert!(!output.status.success(), "{bad:?}");

@@ -10,7 +10,9 @@
 //! that do not touch the image border and are smaller than a limit. Both report what they changed,
 //! which the segmenter passes on in its output. [`clean`] runs both on the box around the foreground
 //! only ([`PixelBox`]), with the same result as on the whole grid. [`remove_large_off_cloth`] takes
-//! out the pieces of the region that are not cloth and too large for a marker. [`attach_parts`]
+//! out the pieces of the region that are not cloth and too large for a marker, and
+//! [`remove_far_from_markers`] the cloth farther from every marker than the suit's can be.
+//! [`attach_parts`]
 //! then grows the suit into a band around it ([`part_band`]) through pixels of a part's colour, in
 //! pieces shaped like a head, a hand or a shoe ([`PartLimits`]); [`expected_head`] and
 //! [`expected_shoes`] mark where a head is expected above the suit and shoes below it, for a last
@@ -29,6 +31,9 @@ pub struct CleanupReport {
     /// Pieces of the cut too large for a marker that are not cloth ([`remove_large_off_cloth`]).
     pub off_cloth_pieces: usize,
     pub off_cloth_pixels: usize,
+    /// Pixels of the cut farther from every marker than the suit's cloth can be
+    /// ([`remove_far_from_markers`]).
+    pub far_from_markers_pixels: usize,
 }
 
 /// 4-connected components of pixels equal to `value`; returns the component id of every pixel
@@ -372,6 +377,65 @@ pub fn remove_large_off_cloth(
     let mut removed = (0, 0);
     for &(count, _) in stats.iter().filter(|&&(count, _)| too_large(count)) {
         removed = (removed.0 + 1, removed.1 + count);
+    }
+    removed
+}
+
+/// Unlabels the pixels of `region` farther than `reach` pixels (the 3-4 chamfer distance) from
+/// every marker of the region, and returns how many. The markers are the pixels of a marker's
+/// colour (`marker`) in the region or in a hole of it up to `hole` pixels across (the cut can
+/// leave a marker out of the suit around it): outside the region, a pixel with region within
+/// `hole` pixels left, right, above and below it. The suit prints a marker in every cell of its
+/// grid, so its cloth is never far from one; a cloth-coloured object that the cut joined to the
+/// person is, beyond a stretch of it, and the room beside it does not count even where it has a
+/// marker's colour. `distance` is scratch.
+pub fn remove_far_from_markers(
+    region: &mut [bool],
+    width: usize,
+    height: usize,
+    marker: impl Fn(usize) -> bool,
+    (reach, hole): (usize, usize),
+    distance: &mut Vec<u16>,
+) -> usize {
+    let Some(b) = PixelBox::around(region, width, height, 0) else {
+        return 0;
+    };
+    // Region within `hole` pixels of (x, y) along (dx, dy).
+    let region_along = |(x, y): (usize, usize), (dx, dy): (isize, isize)| {
+        (1..=hole as isize).any(|step| {
+            let (nx, ny) = (x as isize + dx * step, y as isize + dy * step);
+            (0..width as isize).contains(&nx)
+                && (0..height as isize).contains(&ny)
+                && region[ny as usize * width + nx as usize]
+        })
+    };
+    distance.clear();
+    for y in b.y0..b.y1 {
+        distance.extend((b.x0..b.x1).map(|x| {
+            let i = y * width + x;
+            let is_marker = marker(i)
+                && (region[i]
+                    || [(-1, 0), (1, 0), (0, -1), (0, 1)]
+                        .into_iter()
+                        .all(|d| region_along((x, y), d)));
+            if is_marker {
+                0
+            } else {
+                super::features::FAR
+            }
+        }));
+    }
+    super::features::chamfer(distance, b.width(), b.height());
+    let limit = (3 * reach.min(super::features::FAR as usize / 3)) as u16;
+    let mut removed = 0;
+    for (y, row) in (b.y0..b.y1).zip(distance.chunks_exact(b.width())) {
+        let pixels = &mut region[y * width + b.x0..y * width + b.x1];
+        for (p, &d) in pixels.iter_mut().zip(row) {
+            if *p && d > limit {
+                *p = false;
+                removed += 1;
+            }
+        }
     }
     removed
 }
@@ -978,6 +1042,38 @@ mod tests {
             remove_large_off_cloth(&mut empty, 6, 4, |_| true, 0, &mut crop, &mut ids),
             (0, 0)
         );
+    }
+
+    #[test]
+    fn cloth_farther_than_the_reach_from_every_marker_is_removed() {
+        // A 9×3 strip of person; its one marker pixel at (1, 1) (index 10). The 3-4 chamfer
+        // distance from it: 3 per step along a row or column, 4 per diagonal step, so column x of
+        // rows 0 and 2 is 4 + 3·(x − 2) away for x ≥ 2, and of row 1 3·(x − 1).
+        let strip = || grid(&["#########", "#########", "#########"]);
+        let (mut region, w, h) = strip();
+        let marker = |i: usize| i == 10;
+        let far = |region: &mut [bool], marker: &dyn Fn(usize) -> bool, reach: usize| {
+            remove_far_from_markers(region, w, h, marker, (reach, 2), &mut Vec::new())
+        };
+        // Reach 3 px (limit 9): row 1 keeps x ≤ 4, rows 0 and 2 x ≤ 3 (x = 4 is 10 away).
+        let removed = far(&mut region, &marker, 3);
+        assert_eq!(region, grid(&["####.....", "#####....", "####....."]).0);
+        assert_eq!(removed, 27 - 13);
+        // The marker a hole of the region (the cut left it out; holes up to 2 px across): the same.
+        let (mut holed, ..) = grid(&["#########", "#.#######", "#########"]);
+        far(&mut holed, &marker, 3);
+        assert_eq!(holed, grid(&["####.....", "#.###....", "####....."]).0);
+        // Beside the region, in the room, it is no marker of the region: everything goes.
+        let (mut beside, ..) = grid(&["#########", ".########", "#########"]);
+        let room_marker = |i: usize| i == 9;
+        assert_eq!(far(&mut beside, &room_marker, 3), 26);
+        // A reach beyond the strip keeps it whole; with no marker everything goes; an empty
+        // region changes nothing.
+        let (mut whole, ..) = strip();
+        assert_eq!(far(&mut whole, &marker, 8), 0);
+        assert_eq!(far(&mut whole, &|_| false, 8), 27);
+        let mut empty = vec![false; 27];
+        assert_eq!(far(&mut empty, &marker, 0), 0);
     }
 
     #[test]
