@@ -349,45 +349,48 @@ const LANE_BITS: u32 = 16;
 pub const FAR: u16 = u16::MAX / 2;
 
 /// Two-pass 3-4 chamfer distance transform in place: seeds hold 0, other pixels [`FAR`]; the result
-/// is 3 × the distance in pixels (4 per diagonal step).
+/// is 3 × the distance in pixels (4 per diagonal step): for a seed `a` columns and `b` rows away,
+/// 3·max(a, b) + min(a, b). Each pass takes a row's steps from the row before it (straight and
+/// diagonal) over the whole row at once, which vectorises, then its steps along the row, the one
+/// part that runs pixel after pixel.
 pub fn chamfer(d: &mut [u16], w: usize, h: usize) {
+    if w == 0 || h == 0 {
+        return;
+    }
+    // Forward: the row above and its two diagonals, then from the left.
     for y in 0..h {
-        for x in 0..w {
-            let i = y * w + x;
-            let mut v = d[i];
-            if x > 0 {
-                v = v.min(d[i - 1] + 3);
-            }
-            if y > 0 {
-                v = v.min(d[i - w] + 3);
-                if x > 0 {
-                    v = v.min(d[i - w - 1] + 4);
-                }
-                if x + 1 < w {
-                    v = v.min(d[i - w + 1] + 4);
-                }
-            }
-            d[i] = v;
+        if y > 0 {
+            let (above, row) = d[(y - 1) * w..(y + 1) * w].split_at_mut(w);
+            from_row(row, above);
+        }
+        let row = &mut d[y * w..(y + 1) * w];
+        for x in 1..w {
+            row[x] = row[x].min(row[x - 1] + 3);
         }
     }
+    // Backward: the row below and its two diagonals, then from the right.
     for y in (0..h).rev() {
-        for x in (0..w).rev() {
-            let i = y * w + x;
-            let mut v = d[i];
-            if x + 1 < w {
-                v = v.min(d[i + 1] + 3);
-            }
-            if y + 1 < h {
-                v = v.min(d[i + w] + 3);
-                if x + 1 < w {
-                    v = v.min(d[i + w + 1] + 4);
-                }
-                if x > 0 {
-                    v = v.min(d[i + w - 1] + 4);
-                }
-            }
-            d[i] = v;
+        if y + 1 < h {
+            let (row, below) = d[y * w..(y + 2) * w].split_at_mut(w);
+            from_row(row, below);
         }
+        let row = &mut d[y * w..(y + 1) * w];
+        for x in (0..w - 1).rev() {
+            row[x] = row[x].min(row[x + 1] + 3);
+        }
+    }
+}
+
+/// One chamfer step from the neighbouring row `next` into `row`: straight (3) and diagonal (4).
+fn from_row(row: &mut [u16], next: &[u16]) {
+    for (v, &n) in row.iter_mut().zip(next) {
+        *v = (*v).min(n + 3);
+    }
+    for (v, &n) in row[1..].iter_mut().zip(next) {
+        *v = (*v).min(n + 4);
+    }
+    for (v, &n) in row.iter_mut().zip(&next[1..]) {
+        *v = (*v).min(n + 4);
     }
 }
 
@@ -626,6 +629,33 @@ impl FrameFeatures {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        #[test]
+        fn the_chamfer_transform_is_the_nearest_seeds_3_4_distance(
+            cells in proptest::collection::vec(proptest::bool::weighted(0.08), 1..300),
+            width in 1usize..24,
+        ) {
+            let height = cells.len() / width;
+            proptest::prop_assume!(height > 0);
+            let seeds = &cells[..width * height];
+            let mut d: Vec<u16> = seeds.iter().map(|&s| if s { 0 } else { FAR }).collect();
+            chamfer(&mut d, width, height);
+            for (i, &got) in d.iter().enumerate() {
+                let (x, y) = (i % width, i / width);
+                // 3 per step, 4 per diagonal: a seed a columns and b rows away is 3·max + min.
+                let nearest = (0..seeds.len())
+                    .filter(|&j| seeds[j])
+                    .map(|j| {
+                        let (a, b) = ((j % width).abs_diff(x), (j / width).abs_diff(y));
+                        (3 * a.max(b) + a.min(b)) as u16
+                    })
+                    .min()
+                    .unwrap_or(FAR);
+                proptest::prop_assert_eq!(got, nearest, "pixel ({}, {})", x, y);
+            }
+        }
+    }
 
     #[test]
     fn grey_and_dark_pixels_are_achromatic() {
