@@ -128,6 +128,10 @@ enum Command {
         /// object touching the person.
         #[arg(long)]
         cloth_reach: Option<f32>,
+        /// Without the outline's pixels decided by unmixing the colours beside them (as before
+        /// the tenth session of 2026-12-06; for comparisons).
+        #[arg(long)]
+        no_unmix: bool,
         /// Without the room learned pixel by pixel (as before the second session of 2026-12-06;
         /// for comparisons).
         #[arg(long)]
@@ -526,18 +530,21 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
 
 /// The segmenter's options with `suitcap segment`'s overrides of the part memory and the last
 /// look for a head and shoes (nats), the share of the person's own part colours, the edge
-/// snapping's room share for marker colours, the cloth's reach from the markers (cm) and the
-/// room model (`no_room`: off).
+/// snapping's room share for marker colours, the cloth's reach from the markers (cm), the room
+/// model (`no_room`: off) and the outline's unmixing (`no_unmix`: off).
 fn segmenter_options(
     (part_memory, part_look): (Option<f32>, Option<f32>),
     part_colours: Option<f32>,
     keep_room_share: Option<f32>,
     cloth_reach: Option<f32>,
-    no_room: bool,
+    (no_room, no_unmix): (bool, bool),
 ) -> anyhow::Result<SegmenterOptions> {
     let mut options = SegmenterOptions::default();
     if no_room {
         options.room = None;
+    }
+    if no_unmix {
+        options.unmix = None;
     }
     // `flag`'s value if it is finite and not negative, else an error naming the flag.
     let at_least_zero = |flag: &str, value: f32, what: &str| {
@@ -976,6 +983,7 @@ fn main() -> ExitCode {
             part_colours,
             keep_room_share,
             cloth_reach,
+            no_unmix,
             no_room,
             dump_graph,
             graph_out,
@@ -984,7 +992,7 @@ fn main() -> ExitCode {
             *part_colours,
             *keep_room_share,
             *cloth_reach,
-            *no_room,
+            (*no_room, *no_unmix),
         )
         .and_then(|options| {
             segment(

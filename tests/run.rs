@@ -390,6 +390,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         ("trained colours", &["--part-colours", "0"][..]),
         ("marker colours kept", &["--keep-room-share", "2"][..]),
         ("cloth anywhere", &["--cloth-reach", "0"][..]),
+        ("outline not unmixed", &["--no-unmix"][..]),
     ] {
         let out = tmp.path().join(name);
         let report = succeeded(segment(&out, &all_masks, extra));

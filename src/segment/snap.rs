@@ -1,4 +1,5 @@
-//! Edge snapping: the full-resolution mask's outline moved onto the frame's colour edge.
+//! Edge snapping: the full-resolution mask's outline moved onto the frame's colour edge, then
+//! decided pixel by pixel by how much of the person's colour each holds.
 //!
 //! The cut decides the person at half resolution and the refinement
 //! ([`Segmenter`](super::Segmenter), step 5) decides the pixels of the boundary band at full
@@ -45,7 +46,15 @@
 //! colour did): the selection's IoU the same, the markers' recall over the nine 0.9137 → 0.9140; a
 //! drink over a sky-blue photograph 0.9624 → 0.9667.
 //!
-//! The snapped [`Mask`] goes on to marker detection like the refined one.
+//! Then [`unmix_outline`] decides each outline pixel once more by linear unmixing: where the
+//! pixel's colour lies between the colours sampled a pixel and a half inside and outside along the
+//! outline's normal, it is person when it holds more than half of the inside's colour. The
+//! nearest-colour test above compares the pixel with each side's nearest sample, and a blur of the
+//! green cloth with a blue room reads as cyan, with a red one as red: a marker's colour, which it
+//! keeps; the masks added 1.5–3 times as many pixels one pixel outside the true outline as they
+//! missed one pixel inside (tenth session of 2026-12-06, docs/measurements.md).
+//!
+//! The snapped and unmixed [`Mask`] goes on to marker detection like the refined one.
 
 use image::RgbImage;
 
@@ -199,6 +208,126 @@ const PERSON: u8 = 2;
 /// region are not looked at (the caller's region has background all round it, or ends at the
 /// image's edge). Written as whole-row operations without branches, so that it runs in vector
 /// lanes: the region is the person's whole box.
+/// How [`unmix_outline`] decides the outline's pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Unmixing {
+    /// How far inside and outside along the outline's normal the two sides are sampled, pixels.
+    pub distance: f32,
+    /// The least RGB distance between the two samples (0–255 a channel) for a pixel to be decided.
+    pub min_contrast: f32,
+    /// The largest distance of the pixel's colour from the line between the two samples, as a
+    /// share of their distance, for a pixel to be decided.
+    pub max_residual: f32,
+}
+
+/// Decides each outline pixel of `mask` (one with a 4-neighbour of the other label) by linear
+/// unmixing: its colour `c` taken as `α·f + (1 − α)·b` between the colours `f` and `b` sampled
+/// (bilinearly) [`Unmixing::distance`] pixels inside and outside along the outline's normal,
+/// person where `α ≥ ½`. The camera's blur mixes the two sides, and a pixel covered more than
+/// half by the person is more than half the person's colour, whatever the two colours are; the
+/// nearest-colour snapping above only compares the pixel with each side's nearest sample, which
+/// a mix of the cloth's green and a blue room (cyan) or the room's red (a red marker) can be
+/// nearer to. A pixel whose two sides differ by less than [`Unmixing::min_contrast`], or whose
+/// colour lies off the line between them by more than [`Unmixing::max_residual`] of their
+/// distance (a marker on the outline, a third colour), keeps its label. All pixels are decided
+/// from the labels before the pass. Returns how many changed, or `None` (and leaves the mask
+/// alone) when the frame and the mask differ in size.
+pub fn unmix_outline(frame: &RgbImage, mask: &mut Mask, unmixing: Unmixing) -> Option<usize> {
+    let (w, h) = (mask.width() as usize, mask.height() as usize);
+    if (frame.width() as usize, frame.height() as usize) != (w, h) {
+        return None;
+    }
+    // The person's box grown by a pixel holds every outline pixel; outside it is background.
+    let Some(b) = PixelBox::around(mask.pixels(), w, h, 1) else {
+        return Some(0);
+    };
+    let bw = b.width();
+    let mut label: Vec<u8> = Vec::with_capacity(bw * b.height());
+    for y in b.y0..b.y1 {
+        label.extend(
+            mask.pixels()[y * w + b.x0..y * w + b.x1]
+                .iter()
+                .map(|&p| p as u8),
+        );
+    }
+    let mut class = vec![OUTLINE; label.len()];
+    mark_classes(&label, bw, &mut class);
+    let rgb = frame.as_raw();
+    let at = |x: usize, y: usize| {
+        let i = 3 * (y * w + x);
+        [rgb[i] as f32, rgb[i + 1] as f32, rgb[i + 2] as f32]
+    };
+    // Bilinear colour at (fx, fy) in frame pixels, clamped to the frame.
+    let sample = |fx: f32, fy: f32| {
+        let (fx, fy) = (fx.clamp(0.0, (w - 1) as f32), fy.clamp(0.0, (h - 1) as f32));
+        let (x0, y0) = (fx as usize, fy as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
+        let (a, b, c, d) = (at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1));
+        std::array::from_fn::<f32, 3, _>(|k| {
+            (a[k] * (1.0 - tx) + b[k] * tx) * (1.0 - ty) + (c[k] * (1.0 - tx) + d[k] * tx) * ty
+        })
+    };
+    let min_contrast2 = unmixing.min_contrast * unmixing.min_contrast;
+    let max_residual2 = unmixing.max_residual * unmixing.max_residual;
+    let mut flips = Vec::new();
+    for k in outline_pixels(&class) {
+        let (bx, by) = (k % bw, k / bw);
+        let (x, y) = (b.x0 + bx, b.y0 + by);
+        // The normal into the person: the summed offsets of the person's pixels in the 5×5
+        // window minus those of the background's (beyond the frame's edge, the edge's labels:
+        // a window cut by the edge would tilt the normal).
+        let person_at = |dx: isize, dy: isize| {
+            let gx = (x as isize + dx).clamp(0, w as isize - 1) as usize;
+            let gy = (y as isize + dy).clamp(0, h as isize - 1) as usize;
+            b.contains(gx, gy) && label[(gy - b.y0) * bw + gx - b.x0] == 1
+        };
+        let (mut nx, mut ny) = (0i32, 0i32);
+        let inner = bx >= 2 && by >= 2 && bx + 2 < bw && by + 2 < label.len() / bw;
+        for dy in -2..=2isize {
+            for dx in -2..=2isize {
+                let person = if inner {
+                    // The window within the box: no clamping needed.
+                    let (qx, qy) = ((bx as isize + dx) as usize, (by as isize + dy) as usize);
+                    label[qy * bw + qx] == 1
+                } else {
+                    person_at(dx, dy)
+                };
+                let side = if person { 1 } else { -1 };
+                nx += side * dx as i32;
+                ny += side * dy as i32;
+            }
+        }
+        let (nx, ny) = (nx as f32, ny as f32);
+        let norm = (nx * nx + ny * ny).sqrt();
+        if norm < 1e-3 {
+            continue;
+        }
+        let step = unmixing.distance / norm;
+        let inside = sample(x as f32 + step * nx, y as f32 + step * ny);
+        let outside = sample(x as f32 - step * nx, y as f32 - step * ny);
+        let c = at(x, y);
+        let across: [f32; 3] = std::array::from_fn(|k| inside[k] - outside[k]);
+        let contrast2: f32 = across.iter().map(|v| v * v).sum();
+        if contrast2 < min_contrast2 || contrast2 == 0.0 {
+            continue;
+        }
+        let from_outside: [f32; 3] = std::array::from_fn(|k| c[k] - outside[k]);
+        let alpha = (0..3).map(|k| from_outside[k] * across[k]).sum::<f32>() / contrast2;
+        let residual2: f32 = (0..3)
+            .map(|k| (from_outside[k] - alpha * across[k]).powi(2))
+            .sum();
+        if residual2 <= max_residual2 * contrast2 && (alpha >= 0.5) != (label[k] == 1) {
+            flips.push(y * w + x);
+        }
+    }
+    let pixels = mask.pixels_mut();
+    for &i in &flips {
+        pixels[i] = !pixels[i];
+    }
+    Some(flips.len())
+}
+
 fn mark_classes(label: &[u8], rw: usize, class: &mut [u8]) {
     let rows: Vec<&[u8]> = label.chunks_exact(rw).collect();
     for (y, (row, out)) in rows.iter().zip(class.chunks_exact_mut(rw)).enumerate() {
@@ -318,6 +447,50 @@ mod tests {
             Some(0)
         );
         assert_eq!(right, columns(4));
+    }
+
+    const UNMIXING: Unmixing = Unmixing {
+        distance: 1.5,
+        min_contrast: 30.0,
+        max_residual: 0.15,
+    };
+
+    #[test]
+    fn unmixing_puts_the_outline_where_the_blur_is_half_person() {
+        let frame = blurred_edge();
+        // Too wide: column 4 (0.3 person) between the samples at x 2.5 (0.85) and 5.5 (the room)
+        // is α = 0.3 / 0.85 ≈ 0.35: background. Column 5 (the room) stays.
+        let mut wide = columns(5);
+        assert_eq!(unmix_outline(&frame, &mut wide, UNMIXING), Some(3));
+        assert_eq!(wide, columns(4));
+        // Too narrow: column 3 (0.7) between the person at x 1.5 and 4.5 (0.15) is α ≈ 0.65:
+        // person. Column 2 (the person) stays.
+        let mut narrow = columns(3);
+        assert_eq!(unmix_outline(&frame, &mut narrow, UNMIXING), Some(3));
+        assert_eq!(narrow, columns(4));
+        let mut right = columns(4);
+        assert_eq!(unmix_outline(&frame, &mut right, UNMIXING), Some(0));
+    }
+
+    #[test]
+    fn unmixing_leaves_a_third_colour_and_a_flat_frame_alone() {
+        // A sharp edge after column 3 and a red pixel at (4, 1): its colour lies 0.47 of the
+        // two sides' distance off the line between them, so it keeps its label; the room's
+        // pixels of column 4 go.
+        let mut frame = RgbImage::from_fn(8, 3, |x, _| Rgb(if x < 4 { SUIT } else { ROOM_COLOUR }));
+        frame.put_pixel(4, 1, Rgb([200, 0, 0]));
+        let mut mask = columns(5);
+        assert_eq!(unmix_outline(&frame, &mut mask, UNMIXING), Some(2));
+        let mut expected = columns(4);
+        expected.pixels_mut()[8 + 4] = true;
+        assert_eq!(mask, expected);
+        // One colour everywhere: no contrast, nothing decided; no person; another size.
+        let flat = RgbImage::from_pixel(8, 3, Rgb(SUIT));
+        let mut mask = columns(5);
+        assert_eq!(unmix_outline(&flat, &mut mask, UNMIXING), Some(0));
+        assert_eq!(unmix_outline(&flat, &mut columns(0), UNMIXING), Some(0));
+        let small = RgbImage::from_pixel(4, 3, Rgb(SUIT));
+        assert_eq!(unmix_outline(&small, &mut columns(5), UNMIXING), None);
     }
 
     #[test]
