@@ -12,12 +12,10 @@
 //! only ([`PixelBox`]), with the same result as on the whole grid. [`remove_large_off_cloth`] takes
 //! out the pieces of the region that are not cloth and too large for a marker, and
 //! [`remove_far_from_markers`] the cloth farther from every marker than the suit's can be.
-//! [`attach_parts`]
-//! then grows the suit into a band around it ([`part_band`]) through pixels of a part's colour, in
-//! pieces shaped like a head, a hand or a shoe ([`PartLimits`]); [`expected_head`] and
-//! [`expected_shoes`] mark where a head is expected above the suit and shoes below it, for a last
-//! look where less was found. The person mask goes to
-//! the refinement at full resolution.
+//! [`attach_parts`] then grows the suit into a band around it ([`part_band`]) through pixels of a
+//! part's colour, in pieces shaped like a head, a hand or a shoe ([`PartLimits`]); [`expected_head`]
+//! and [`expected_shoes`] mark where a head is expected above the suit and shoes below it, for a
+//! last look where less was found. The person mask goes to the refinement at full resolution.
 
 use crate::mask::bounding_box_of;
 
