@@ -51,7 +51,7 @@
 //! outline's normal, it is person when it holds more than half of the inside's colour. The
 //! nearest-colour test above compares the pixel with each side's nearest sample, and a blur of the
 //! green cloth with a blue room reads as cyan, with a red one as red: a marker's colour, which it
-//! keeps; the masks added 1.5–3 times as many pixels one pixel outside the true outline as they
+//! keeps; the masks added up to 8 times as many pixels one pixel outside the true outline as they
 //! missed one pixel inside (tenth session of 2026-12-06, docs/measurements.md).
 //!
 //! The snapped and unmixed [`Mask`] goes on to marker detection like the refined one.
