@@ -97,15 +97,15 @@ pub fn snap_to_colour_edges(
     // it reads lie within the person's box grown by `passes + radius`; the work is done on a
     // copy of that region's labels, written back at the end.
     let grow = (radius + passes) as usize;
-    let Some(PixelBox {
+    let Some(region) = PixelBox::around(mask.pixels(), w, h, grow) else {
+        return Some(0);
+    };
+    let PixelBox {
         x0: rx0,
         y0: ry0,
         x1: rx1,
         y1: ry1,
-    }) = PixelBox::around(mask.pixels(), w, h, grow)
-    else {
-        return Some(0);
-    };
+    } = region;
     let (rw, rh) = (rx1 - rx0, ry1 - ry0);
     // The region's labels as 0 or 1; colours are read from the frame, four lanes per pixel (the
     // fourth zero) so that a distance is one vector subtraction, product and sum.
@@ -114,14 +114,7 @@ pub fn snap_to_colour_edges(
         let i = 3 * ((ry0 + y) * w + rx0 + x);
         [rgb[i] as i32, rgb[i + 1] as i32, rgb[i + 2] as i32, 0]
     };
-    let mut label: Vec<u8> = Vec::with_capacity(rw * rh);
-    for y in ry0..ry1 {
-        label.extend(
-            mask.pixels()[y * w + rx0..y * w + rx1]
-                .iter()
-                .map(|&p| p as u8),
-        );
-    }
+    let mut label = labels_in(mask, region);
     let r = radius as usize;
     let mut class = vec![OUTLINE; rw * rh];
     // After the first pass only the pixels within `radius + 1` of a change can decide
@@ -241,15 +234,8 @@ pub fn unmix_outline(frame: &RgbImage, mask: &mut Mask, unmixing: Unmixing) -> O
     let Some(b) = PixelBox::around(mask.pixels(), w, h, 1) else {
         return Some(0);
     };
-    let bw = b.width();
-    let mut label: Vec<u8> = Vec::with_capacity(bw * b.height());
-    for y in b.y0..b.y1 {
-        label.extend(
-            mask.pixels()[y * w + b.x0..y * w + b.x1]
-                .iter()
-                .map(|&p| p as u8),
-        );
-    }
+    let (bw, bh) = (b.width(), b.height());
+    let label = labels_in(mask, b);
     let mut class = vec![OUTLINE; label.len()];
     mark_classes(&label, bw, &mut class);
     let rgb = frame.as_raw();
@@ -283,7 +269,7 @@ pub fn unmix_outline(frame: &RgbImage, mask: &mut Mask, unmixing: Unmixing) -> O
             b.contains(gx, gy) && label[(gy - b.y0) * bw + gx - b.x0] == 1
         };
         let (mut nx, mut ny) = (0i32, 0i32);
-        let inner = bx >= 2 && by >= 2 && bx + 2 < bw && by + 2 < label.len() / bw;
+        let inner = bx >= 2 && by >= 2 && bx + 2 < bw && by + 2 < bh;
         for dy in -2..=2isize {
             for dx in -2..=2isize {
                 let person = if inner {
@@ -326,6 +312,20 @@ pub fn unmix_outline(frame: &RgbImage, mask: &mut Mask, unmixing: Unmixing) -> O
         pixels[i] = !pixels[i];
     }
     Some(flips.len())
+}
+
+/// The labels of `mask` within the box `b` as 0 or 1, row-major.
+fn labels_in(mask: &Mask, b: PixelBox) -> Vec<u8> {
+    let w = mask.width() as usize;
+    let mut label = Vec::with_capacity(b.width() * b.height());
+    for y in b.y0..b.y1 {
+        label.extend(
+            mask.pixels()[y * w + b.x0..y * w + b.x1]
+                .iter()
+                .map(|&p| p as u8),
+        );
+    }
+    label
 }
 
 fn mark_classes(label: &[u8], rw: usize, class: &mut [u8]) {
