@@ -18,10 +18,8 @@ work="${1:-$(mktemp -d)}"
 [ -d "$shared/mocap" ] || { echo "eval_heldout: $shared/mocap not found (set SHARED)" >&2; exit 2; }
 cargo build --release --workspace
 bin=target/release
-mkdir -p "$work/bg"
-for photo in "$shared"/backgrounds/photos/*.jpg; do
-  [ -e "tests/data/backgrounds/photos/$(basename "$photo")" ] || ln -sf "$(realpath "$photo")" "$work/bg/"
-done
+. scripts/unseen_photos.sh
+unseen_photos "$work/bg"
 names=()
 seed=700
 for pass in 1 2; do

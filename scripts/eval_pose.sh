@@ -12,10 +12,8 @@ work="${1:-$(mktemp -d)}"
 shift || true
 [ -d "$shared/mocap" ] || { echo "eval_pose: $shared/mocap not found (set SHARED)" >&2; exit 2; }
 cargo build --release --workspace
-mkdir -p "$work/bg"
-for photo in "$shared"/backgrounds/photos/*.jpg; do
-  [ -e "tests/data/backgrounds/photos/$(basename "$photo")" ] || ln -sf "$(realpath "$photo")" "$work/bg/"
-done
+. scripts/unseen_photos.sh
+unseen_photos "$work/bg"
 data=()
 seed=200
 for clip in tests/data/mocap/cmu_02_01_walk.bvh tests/data/mocap/cmu_08_01_walk.bvh \
