@@ -2,15 +2,15 @@
 # A second draw of the held-out test set: the six test motions of scripts/eval_pose.sh (walk 02_01,
 # walk 08_01, kick 10_03, jump 13_39, dance 05_12, kick 11_01) rendered twice more, with seeds
 # 701-712 (other subjects, cameras, lighting and moving clutter than eval_pose.sh's 201-206, and
-# clear of train.sh's 101-127, 601-627, 1101-1127 and 1601-1627), over the same photographs that no training
-# rendering saw (../shared/backgrounds/photos less the bundled ones). Then, for the shipped default
-# suit on all twelve: the segmenter's mean and worst-frame IoU per sequence (issue #3), marker
-# recall and precision inside the ground-truth masks and inside the segmenter's (issue #4, markers
-# with >= 60 % of their square visible), and the joint-angle error (issue #5). The figures it
-# prints are what the README's rows quote as the "second draw".
+# clear of train.sh's 101-127, 601-627, 1101-1127 and 1601-1627), over the same photographs that no
+# training rendering saw (../shared/backgrounds/photos less the bundled ones). Then, for the shipped
+# default suit on all twelve: the segmenter's mean and worst-frame IoU per sequence (issue #3),
+# marker recall and precision inside the ground-truth masks and inside the segmenter's (issue #4,
+# markers with >= 60 % of their square visible), and the joint-angle error (issue #5). The figures
+# it prints are what the README's rows quote as the "second draw".
 #   scripts/eval_heldout.sh [WORK_DIR]
-# Needs ../shared (the CMU clips and photographs beside the repository). About 2 minutes on a
-# 2-core machine.
+# Needs ../shared (the CMU clips and photographs beside the repository). About 2 minutes on a 2-core
+# machine.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 shared="${SHARED:-../shared}"
