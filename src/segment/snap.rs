@@ -197,10 +197,6 @@ const BACKGROUND: u8 = 1;
 /// A person pixel off the outline: a person sample.
 const PERSON: u8 = 2;
 
-/// The class of every pixel of a region of labels (0 or 1) `rw` wide. The pixels around the
-/// region are not looked at (the caller's region has background all round it, or ends at the
-/// image's edge). Written as whole-row operations without branches, so that it runs in vector
-/// lanes: the region is the person's whole box.
 /// How [`unmix_outline`] decides the outline's pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Unmixing {
@@ -328,6 +324,10 @@ fn labels_in(mask: &Mask, b: PixelBox) -> Vec<u8> {
     label
 }
 
+/// The class of every pixel of a region of labels (0 or 1) `rw` wide. The pixels around the
+/// region are not looked at (the caller's region has background all round it, or ends at the
+/// image's edge). Written as whole-row operations without branches, so that it runs in vector
+/// lanes: the region is the person's whole box.
 fn mark_classes(label: &[u8], rw: usize, class: &mut [u8]) {
     let rows: Vec<&[u8]> = label.chunks_exact(rw).collect();
     for (y, (row, out)) in rows.iter().zip(class.chunks_exact_mut(rw)).enumerate() {
