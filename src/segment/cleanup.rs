@@ -298,18 +298,18 @@ pub fn distance_near(
     distance: &mut Vec<u16>,
 ) -> Option<PixelBox> {
     let b = PixelBox::around(region, width, height, reach)?;
+    chamfer_in_box(b, |x, y| region[y * width + x], distance);
+    Some(b)
+}
+
+/// The 3-4 chamfer distance within the box `b` from the grid pixels `(x, y)` that `seed` accepts,
+/// into `distance` (box-sized, row-major).
+fn chamfer_in_box(b: PixelBox, seed: impl Fn(usize, usize) -> bool, distance: &mut Vec<u16>) {
     distance.clear();
     for y in b.y0..b.y1 {
-        distance.extend(region[y * width + b.x0..y * width + b.x1].iter().map(|&s| {
-            if s {
-                0
-            } else {
-                super::features::FAR
-            }
-        }));
+        distance.extend((b.x0..b.x1).map(|x| if seed(x, y) { 0 } else { super::features::FAR }));
     }
     super::features::chamfer(distance, b.width(), b.height());
-    Some(b)
 }
 
 /// How far the person's parts outside the suit (head, hands, shoes) reach from it, as a share of the
@@ -407,23 +407,18 @@ pub fn remove_far_from_markers(
                 && region[ny as usize * width + nx as usize]
         })
     };
-    distance.clear();
-    for y in b.y0..b.y1 {
-        distance.extend((b.x0..b.x1).map(|x| {
+    chamfer_in_box(
+        b,
+        |x, y| {
             let i = y * width + x;
-            let is_marker = marker(i)
+            marker(i)
                 && (region[i]
                     || [(-1, 0), (1, 0), (0, -1), (0, 1)]
                         .into_iter()
-                        .all(|d| region_along((x, y), d)));
-            if is_marker {
-                0
-            } else {
-                super::features::FAR
-            }
-        }));
-    }
-    super::features::chamfer(distance, b.width(), b.height());
+                        .all(|d| region_along((x, y), d)))
+        },
+        distance,
+    );
     let limit = (3 * reach.min(super::features::FAR as usize / 3)) as u16;
     let mut removed = 0;
     for (y, row) in (b.y0..b.y1).zip(distance.chunks_exact(b.width())) {
