@@ -255,6 +255,32 @@ fn sigterm_finalises_the_take() {
 }
 
 #[test]
+fn drape_names_a_mistyped_garment_before_reading_anything() {
+    // None of these files exist: the garment's name is checked first, so the error is about it.
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let missing = tmp.path().join("missing");
+    let output = suitcap()
+        .arg("drape")
+        .arg("--motion")
+        .arg(missing.join("motion.bvh"))
+        .arg("--camera")
+        .arg(missing.join("camera.toml"))
+        .arg("--frames")
+        .arg(missing.join("frames"))
+        .args(["--garment", "shirt", "--out"])
+        .arg(tmp.path().join("out"))
+        .output()
+        .expect("suitcap drape");
+    let message = text(&output);
+    assert!(!output.status.success(), "{message}");
+    assert!(
+        message.contains("--garment: unknown garment 'shirt'"),
+        "{message}"
+    );
+    assert!(!tmp.path().join("out").exists(), "{message}");
+}
+
+#[test]
 fn drape_composites_a_garment_on_the_true_motion_and_reports_quality() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let data = generated_clip(&tmp.path().join("clip"), 10);

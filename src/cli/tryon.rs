@@ -81,6 +81,17 @@ fn material(name: &str) -> anyhow::Result<Material> {
     })
 }
 
+/// The garment `--garment` names (a built-in one or an OBJ file that exists).
+fn garment_choice(name: &str) -> anyhow::Result<GarmentChoice> {
+    let garment = GarmentChoice::parse(name).context("--garment")?;
+    if let GarmentChoice::Obj(path) = &garment {
+        if !path.is_file() {
+            bail!("--garment: {} does not exist", path.display());
+        }
+    }
+    Ok(garment)
+}
+
 /// The cloth stage asked for, or `None` for `--garment none`.
 fn cloth_stage(
     args: &GarmentArgs,
@@ -90,13 +101,7 @@ fn cloth_stage(
     if args.garment.eq_ignore_ascii_case("none") {
         return Ok(None);
     }
-    let garment = GarmentChoice::parse(&args.garment).context("--garment")?;
-    if let GarmentChoice::Obj(path) = &garment {
-        if !path.is_file() {
-            bail!("--garment: {} does not exist", path.display());
-        }
-    }
-    let mut options = ClothOptions::new(garment, mode);
+    let mut options = ClothOptions::new(garment_choice(&args.garment)?, mode);
     options.material = material(&args.material)?;
     Ok(Some(ClothStage::new(template, options)?))
 }
@@ -801,6 +806,13 @@ pub fn drape(
     use suitcap::body_size::{BodySize, BodySizeEstimator, Silhouette};
     use suitcap::mask::Mask;
     super::ensure_mask_dir("--masks", masks)?;
+    // The options first, so a mistyped garment, fabric or overlay is named before any work.
+    if garment.garment.eq_ignore_ascii_case("none") {
+        bail!("--garment none: drape needs a garment");
+    }
+    let choice = garment_choice(&garment.garment)?;
+    let fabric = material(&garment.material)?;
+    let overlays = parse_overlays(&garment.overlays)?;
     let motion = Motion::load(motion_path)?;
     let camera = Camera::load(camera_path)?;
     let mut source = suitcap::source::directory::DirectorySource::open(frames_dir, 30.0)?;
@@ -860,16 +872,12 @@ pub fn drape(
     if let Some(truth) = generator_truth(frames_dir, Some(&motion)) {
         println!("  {truth}");
     }
-    if garment.garment.eq_ignore_ascii_case("none") {
-        bail!("--garment none: drape needs a garment");
-    }
-    let mut options = ClothOptions::new(GarmentChoice::parse(&garment.garment)?, mode);
-    options.material = material(&garment.material)?;
+    let mut options = ClothOptions::new(choice, mode);
+    options.material = fabric;
     options.known_size = Some(size);
     options.check_tunnelling = true;
     let mut stage = ClothStage::new(&template, options)?;
     let mut render = RenderStage::new(RenderSettings::default(), Vec::new());
-    let overlays = parse_overlays(&garment.overlays)?;
     let out_frames = out.join("frames");
     std::fs::create_dir_all(&out_frames)
         .with_context(|| format!("cannot create {}", out_frames.display()))?;
