@@ -18,7 +18,8 @@
 //!    `x += h·v`. Rigid anchors are kinematic (inverse mass 0) and jump to `bone · local`. The
 //!    normals are those of the previous frame's end: recomputed once a frame, not every substep
 //!    (first session of 2026-12-07: `cargo bench --bench cloth` 8–25 % faster, two runs alternated
-//!    with the build before; `scripts/eval_cloth.sh`'s 46 cases still within the strain targets).
+//!    with the build before; `scripts/eval_cloth.sh`'s 46 cases still within the strain targets),
+//!    except while the garment is put on, when it moves far in a frame.
 //! 3. Constraints, Gauss–Seidel, in this order:
 //!    - **loose anchors** (a dress's waist): toward their slack of `bone · local`, by the fraction
 //!      `1 − exp(−h/τ)` of the way per substep (`τ` = `loose_anchor_seconds`, 100 ms: about 2 %
@@ -1238,6 +1239,11 @@ impl Cloth {
             } else {
                 STRAIN_LIMIT_PASSES
             };
+            // While the garment is put on it moves far in a frame (the arms come down from the
+            // rest pose), and the normals follow it every substep; else once a frame (below).
+            if self.dressing {
+                self.update_normals();
+            }
             self.substep(h, rounds);
         }
         // Once a frame, not every substep (9 % of the solver's time): the normals serve the air
