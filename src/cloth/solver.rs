@@ -16,10 +16,11 @@
 //! 2. Free vertices: velocity += `h·g`; air drag (quadratic along the per-vertex normal, linear along
 //!    the surface, each clamped so it never reverses the velocity); damping; predicted position
 //!    `x += h·v`. Rigid anchors are kinematic (inverse mass 0) and jump to `bone · local`. The
-//!    normals are those of the previous frame's end: recomputed once a frame, not every substep
-//!    (first session of 2026-12-07: `cargo bench --bench cloth` 8–25 % faster, two runs alternated
-//!    with the build before; `scripts/eval_cloth.sh`'s 46 cases still within the strain targets),
-//!    except while the garment is put on, when it moves far in a frame.
+//!    normals are those of the previous frame's end: recomputed once a frame, not every substep,
+//!    except while the garment is put on, when it moves far in a frame (first session of
+//!    2026-12-07: `cargo bench --bench cloth` about 12–15 % faster, the median per case over two
+//!    pairs of runs alternated with the build before; `scripts/eval_cloth.sh`'s 46 cases still
+//!    within the strain targets).
 //! 3. Constraints, Gauss–Seidel, in this order:
 //!    - **loose anchors** (a dress's waist): toward their slack of `bone · local`, by the fraction
 //!      `1 − exp(−h/τ)` of the way per substep (`τ` = `loose_anchor_seconds`, 100 ms: about 2 %
