@@ -254,19 +254,26 @@ fn sigterm_finalises_the_take() {
     assert!(message.contains("stopped by signal"), "{message}");
 }
 
+/// `suitcap drape` on a generated dataset's motion, camera and frames.
+fn drape_on(dataset: &Path) -> Command {
+    let mut command = suitcap();
+    command
+        .arg("drape")
+        .arg("--motion")
+        .arg(dataset.join("motion.bvh"))
+        .arg("--camera")
+        .arg(dataset.join("camera.toml"))
+        .arg("--frames")
+        .arg(dataset.join("frames"));
+    command
+}
+
 #[test]
 fn drape_names_a_mistyped_garment_before_reading_anything() {
     // None of these files exist: the garment's name is checked first, so the error is about it.
     let tmp = tempfile::tempdir().expect("tempdir");
     let missing = tmp.path().join("missing");
-    let output = suitcap()
-        .arg("drape")
-        .arg("--motion")
-        .arg(missing.join("motion.bvh"))
-        .arg("--camera")
-        .arg(missing.join("camera.toml"))
-        .arg("--frames")
-        .arg(missing.join("frames"))
+    let output = drape_on(&missing)
         .args(["--garment", "shirt", "--out"])
         .arg(tmp.path().join("out"))
         .output()
@@ -286,15 +293,7 @@ fn drape_composites_a_garment_on_the_true_motion_and_reports_quality() {
     let data = generated_clip(&tmp.path().join("clip"), 10);
     let out = tmp.path().join("drape");
     let drape = |masks: Option<&Path>, extra: &[&str], out: &Path| {
-        let mut command = suitcap();
-        command
-            .arg("drape")
-            .arg("--motion")
-            .arg(data.join("motion.bvh"))
-            .arg("--camera")
-            .arg(data.join("camera.toml"))
-            .arg("--frames")
-            .arg(data.join("frames"));
+        let mut command = drape_on(&data);
         if let Some(masks) = masks {
             command.arg("--masks").arg(masks);
         }
