@@ -20,6 +20,15 @@ use crate::suit::SuitDefinition;
 /// Height of the unscaled mocap figure (the Daz "Aiko3" of the shipped CMU conversion), top of head.
 pub const BASE_HEIGHT_CM: f32 = 166.0;
 
+/// How far each shoulder joint lies sideways from the chest joint in the rest pose, on the base
+/// figure, cm ([`Subject::fit_shoulders`]; times the subject's girth and height scale). The shipped
+/// CMU skeletons put it 11.5 cm out, so the hanging upper arm's axis lay 5 cm inside the chest part
+/// (16.5 cm to each side at its top) and a T-shirt's torso tube covered the arms. At 19.6 cm (a
+/// shoulder breadth of 49 cm on the base figure: broad) the hanging upper arm, 4.9 cm thick at the
+/// top, clears the chest below the armpit, and the sleeves sit around the arms (docs/measurements.md,
+/// second session of 2026-12-07).
+pub const SHOULDER_HALF_BREADTH_CM: f32 = 19.6;
+
 /// What a part is made of, which decides its colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Material {
@@ -137,12 +146,32 @@ impl Subject {
         }
     }
 
-    /// The mocap skeleton with this subject's bone lengths.
+    /// The mocap skeleton with this subject's bone lengths and its shoulders fitted
+    /// ([`Subject::fit_shoulders`]).
     pub fn scale_skeleton(&self, skeleton: &Skeleton) -> Skeleton {
         let scales: Vec<f32> = (0..skeleton.len())
             .map(|i| self.bone_scale(skeleton, i))
             .collect();
-        skeleton.map_offsets(|i, offset| offset * scales[i])
+        self.fit_shoulders(&skeleton.map_offsets(|i, offset| offset * scales[i]))
+    }
+
+    /// The skeleton with both shoulder joints (`rShldr`, `lShldr`) moved sideways, so that they
+    /// lie [`SHOULDER_HALF_BREADTH_CM`] (times this subject's girth and height scale) from the
+    /// chest joint in the rest pose; the rest of each arm moves with its shoulder. The distance is
+    /// set, not added to, so fitting a fitted skeleton changes nothing. A skeleton without a chest
+    /// or shoulder joints is returned unchanged.
+    pub fn fit_shoulders(&self, skeleton: &Skeleton) -> Skeleton {
+        let Some(chest) = skeleton.find("chest") else {
+            return skeleton.clone();
+        };
+        let target = SHOULDER_HALF_BREADTH_CM * self.girth * self.height_scale();
+        let positions = skeleton.joint_positions(&vec![0.0; skeleton.channel_count()]);
+        let mut shift = vec![0.0f32; skeleton.len()];
+        for shoulder in ["rShldr", "lShldr"].iter().filter_map(|n| skeleton.find(n)) {
+            let lateral = positions[shoulder].x - positions[chest].x;
+            shift[shoulder] = target.copysign(lateral) - lateral;
+        }
+        skeleton.map_offsets(|i, offset| offset + Vec3::X * shift[i])
     }
 
     /// Scales a frame's root translation so that the feet of the scaled figure stay on the floor:
@@ -752,7 +781,7 @@ impl Body {
                 &j("Shldr"),
                 Vec3::ZERO,
                 offset(&j("ForeArm"))?,
-                r(5.4, 5.4),
+                r(4.9, 4.9),
                 r(4.3, 4.3),
                 Vec3::Z,
                 1.0,
@@ -1118,5 +1147,30 @@ mod tests {
         assert_eq!(Subject::find("2").map(|s| s.name), Some("chidi"));
         assert_eq!(Subject::find("Ana").map(|s| s.name), Some("ana"));
         assert!(Subject::find("zed").is_none());
+    }
+
+    #[test]
+    fn shoulders_are_set_at_the_breadth_and_fitting_twice_changes_nothing() {
+        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_09_01_run.bvh");
+        let motion = crate::bvh::Motion::load(&clip).expect("clip");
+        let dana = Subject::find("dana").expect("dana");
+        let fitted = dana.scale_skeleton(&motion.skeleton);
+        let rest = vec![0.0; fitted.channel_count()];
+        let at = |skeleton: &Skeleton, name: &str| {
+            skeleton.joint_positions(&rest)[skeleton.find(name).expect("joint")]
+        };
+        let want = SHOULDER_HALF_BREADTH_CM * 1.22 * 165.0 / BASE_HEIGHT_CM;
+        let chest = at(&fitted, "chest");
+        assert!((at(&fitted, "rShldr").x - chest.x + want).abs() < 1e-3);
+        assert!((at(&fitted, "lShldr").x - chest.x - want).abs() < 1e-3);
+        // The arm below moves with its shoulder; the shoulder's height and depth stay.
+        let unfitted = motion
+            .skeleton
+            .map_offsets(|i, o| o * dana.bone_scale(&motion.skeleton, i));
+        let (hand, shoulder) = (at(&fitted, "lHand"), at(&fitted, "lShldr"));
+        let (hand0, shoulder0) = (at(&unfitted, "lHand"), at(&unfitted, "lShldr"));
+        assert!(((hand - shoulder) - (hand0 - shoulder0)).length() < 1e-3);
+        assert!((shoulder.y - shoulder0.y).abs() < 1e-3 && (shoulder.z - shoulder0.z).abs() < 1e-3);
+        assert_eq!(dana.fit_shoulders(&fitted), fitted);
     }
 }

@@ -360,7 +360,7 @@ fn check_loads_the_trained_models() {
     );
     let part = add("segmenter.bin");
     assert!(
-        part.contains("trained models load: segmenter tables (trained on frames 480 rows high, cut at 1/2; σ_C 2, σ_N 1, σ_G 1, σ_M 2, σ_T 1)\n")
+        part.contains("trained models load: segmenter tables (trained on frames 480 rows high, cut at 1/2; σ_C 1, σ_N 0.03125, σ_G 1, σ_M 1, σ_T 1)\n")
             && part.contains("not trained yet: codebook_*.bin, regressor.bin"),
         "{part}"
     );

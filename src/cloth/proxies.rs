@@ -19,16 +19,20 @@
 //! difference, position channels linearly — runs forward kinematics and fills a reusable
 //! [`BodyPose`]: the bone transforms (for kinematic anchors) and the posed capsules (for collisions).
 //! The solver asks for one pose per substep, so a fast limb moves smoothly between video frames.
+//! Where a pose presses an arm into the trunk deeper than it lies there in the rest pose (mocap
+//! skeletons know nothing of flesh), the rig moves the arm's capsules out until they only touch
+//! (`BodyRig::yield_arms`): the flesh gives way, and the cloth between arm and chest keeps a
+//! place outside both.
 
 use std::ops::Range;
 
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Vec3, Vec3A};
 
 use crate::body::{Body, BodyPart, MissingJoint, Subject};
 use crate::bvh::Motion;
 use crate::skeleton::{interpolate_frames, Skeleton};
 
-use super::capsule::Capsule;
+use super::capsule::{Capsule, PreparedCapsule};
 
 /// Semi-axis ratio above which a part becomes two capsules (a stadium) instead of one.
 pub const STADIUM_RATIO: f32 = 1.2;
@@ -43,11 +47,12 @@ pub const GROUP_ARMS: u8 = 1;
 
 /// The collision group of a body part by name: arms (upper arm, forearm, hand) or trunk (the rest).
 ///
-/// The body model's upper arms overlap the torso by several centimetres when they hang (the shoulder
-/// joint lies inside the chest, and a hanging arm's axis lies inside the chest's width), so no point
-/// between arm and torso is outside both, and the side of a loose shirt lies inside the hanging arm.
-/// The solver therefore lets cloth that rests on the trunk ignore the arms, and resolves cloth that
-/// rests on an arm against the arms first and the trunk last (the trunk wins where they overlap).
+/// The arms rise out of the torso at the shoulders, and a pose may still press an arm against the
+/// chest (the rig moves it out only until it touches), so the side of a loose shirt may meet a
+/// hanging arm. The solver lets cloth that rests on the trunk ignore the arms, and resolves cloth
+/// that rests on an arm against the arms first and the trunk last (the trunk wins where they
+/// overlap). Until the second session of 2026-12-07 the body's hanging upper arms lay inside its
+/// chest, which this split was first made for.
 /// What the cloth leaves inside an arm there is hidden by the renderer's depth test, as the real arm
 /// hides the shirt it presses against the torso.
 pub fn collision_group(part_name: &str) -> u8 {
@@ -173,6 +178,54 @@ pub struct BodyRig {
     subject: Option<Subject>,
     rotation: Vec<bool>,
     root_channels: Range<usize>,
+    /// Per proxy, how deep the spheres at [`YIELD_SAMPLES`] points along it reach into the trunk
+    /// in the rest pose (arm proxies only; empty until [`BodyRig::new`] has measured them).
+    rest_overlap: Vec<[f32; YIELD_SAMPLES]>,
+}
+
+/// Points along an arm capsule (both ends included) at which its reach into the trunk is measured.
+const YIELD_SAMPLES: usize = 5;
+
+/// For each of [`YIELD_SAMPLES`] points along `arm`, how deep the capsule's sphere there reaches
+/// into the trunk capsule it enters deepest (negative: clear of every one by that much), and that
+/// capsule's outward normal at the point (the normal only for that capsule: most points are
+/// tested against a dozen).
+fn trunk_reach(arm: &Capsule, trunk: &[PreparedCapsule]) -> [(f32, Vec3A); YIELD_SAMPLES] {
+    std::array::from_fn(|k| {
+        let t = k as f32 / (YIELD_SAMPLES - 1) as f32;
+        let point = Vec3A::from(arm.a.lerp(arm.b, t));
+        let radius = arm.radius_a + (arm.radius_b - arm.radius_a) * t;
+        let mut deepest: Option<(f32, &PreparedCapsule)> = None;
+        for capsule in trunk {
+            let depth = radius - capsule.distance(point);
+            if deepest.is_none_or(|(d, _)| depth > d) {
+                deepest = Some((depth, capsule));
+            }
+        }
+        match deepest {
+            Some((depth, capsule)) => (depth, capsule.query(point).1),
+            None => (f32::NEG_INFINITY, Vec3A::ZERO),
+        }
+    })
+}
+
+/// How far to move `arm` so that none of its [`YIELD_SAMPLES`] points reaches deeper into the
+/// trunk than `rest` (its reach at those points in the rest pose; a point clear at rest may touch):
+/// the points' excess depths pushed along the trunk's normals there, each less what the pushes
+/// before it already moved the arm that way.
+fn push_out_of_trunk(
+    arm: &Capsule,
+    rest: &[f32; YIELD_SAMPLES],
+    trunk: &[PreparedCapsule],
+) -> Vec3 {
+    let mut push = Vec3A::ZERO;
+    for ((depth, normal), rest) in trunk_reach(arm, trunk).into_iter().zip(rest) {
+        let excess = depth - rest.max(0.0) - push.dot(normal);
+        if excess > 0.0 {
+            push += normal * excess;
+        }
+    }
+    Vec3::from(push)
 }
 
 impl BodyRig {
@@ -184,13 +237,58 @@ impl BodyRig {
             Some(root) => root.first_channel..root.first_channel + root.channels.len(),
             None => 0..0,
         };
-        BodyRig {
+        let mut rig = BodyRig {
             skeleton,
             body,
             proxies,
             subject: None,
             rotation,
             root_channels,
+            rest_overlap: Vec::new(),
+        };
+        let mut rest = BodyPose::default();
+        rig.pose(&rig.rest_frame(), &mut rest);
+        let trunk = rig.trunk_capsules(&rest.capsules);
+        rig.rest_overlap = rest
+            .capsules
+            .iter()
+            .zip(&rig.proxies)
+            .map(|(c, p)| match p.group {
+                GROUP_ARMS => trunk_reach(c, &trunk).map(|(depth, _)| depth),
+                _ => [f32::NEG_INFINITY; YIELD_SAMPLES],
+            })
+            .collect();
+        rig
+    }
+
+    fn trunk_capsules(&self, capsules: &[Capsule]) -> Vec<PreparedCapsule> {
+        capsules
+            .iter()
+            .zip(&self.proxies)
+            .filter(|(_, p)| p.group == GROUP_TRUNK)
+            .map(|c| c.0.prepared())
+            .collect()
+    }
+
+    /// Moves each posed arm capsule out of the trunk, along the trunk's normals, until no point of
+    /// it reaches deeper into the trunk than in the rest pose (a point clear of the trunk at rest
+    /// may touch it): the mocap skeleton knows nothing of flesh, and a swinging or lowered arm
+    /// passes into the chest or hips, where the cloth between them had no place outside both. The
+    /// flesh gives way instead, as a real arm pressed against the chest does. The capsules move
+    /// whole (a translation, their radii kept), so cloth cannot be pulled across a thinned arm.
+    fn yield_arms(&self, capsules: &mut [Capsule]) {
+        let trunk = self.trunk_capsules(capsules);
+        for ((capsule, proxy), rest) in capsules
+            .iter_mut()
+            .zip(&self.proxies)
+            .zip(&self.rest_overlap)
+        {
+            if proxy.group != GROUP_ARMS {
+                continue;
+            }
+            let push = push_out_of_trunk(capsule, rest, &trunk);
+            capsule.a += push;
+            capsule.b += push;
         }
     }
 
@@ -278,6 +376,9 @@ impl BodyRig {
         pose.capsules.clear();
         pose.capsules
             .extend(self.proxies.iter().map(|p| p.posed(&pose.bones)));
+        if !self.rest_overlap.is_empty() {
+            self.yield_arms(&mut pose.capsules);
+        }
     }
 }
 
@@ -287,6 +388,85 @@ mod tests {
     use crate::body::Material;
     use glam::Vec2;
     use std::path::Path;
+
+    #[test]
+    fn an_arm_pressed_into_the_trunk_moves_out_by_what_it_reaches_deeper_than_at_rest() {
+        // A trunk 10 cm thick around the y axis, an upright arm 5 cm thick whose axis is 12 cm
+        // off it: the arm reaches 3 cm into the trunk all along.
+        let trunk = [Capsule::new(Vec3::ZERO, Vec3::new(0.0, 50.0, 0.0), 10.0, 10.0).prepared()];
+        let arm = Capsule::new(
+            Vec3::new(12.0, 10.0, 0.0),
+            Vec3::new(12.0, 40.0, 0.0),
+            5.0,
+            5.0,
+        );
+        let reach = trunk_reach(&arm, &trunk);
+        assert!(reach
+            .iter()
+            .all(|(d, n)| (d - 3.0).abs() < 1e-4 && (*n - Vec3A::X).length() < 1e-5));
+        // Clear of the trunk at rest: out until it touches. In it by 1 cm at rest: out by 2 cm.
+        let push = push_out_of_trunk(&arm, &[-4.0; YIELD_SAMPLES], &trunk);
+        assert!((push - Vec3::new(3.0, 0.0, 0.0)).length() < 1e-4, "{push}");
+        let push = push_out_of_trunk(&arm, &[1.0; YIELD_SAMPLES], &trunk);
+        assert!((push - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-4, "{push}");
+        // No deeper than at rest, or clear of the trunk: it stays.
+        assert_eq!(
+            push_out_of_trunk(&arm, &[3.0; YIELD_SAMPLES], &trunk),
+            Vec3::ZERO
+        );
+        let clear = Capsule::new(
+            Vec3::new(20.0, 10.0, 0.0),
+            Vec3::new(20.0, 40.0, 0.0),
+            5.0,
+            5.0,
+        );
+        assert_eq!(
+            push_out_of_trunk(&clear, &[-4.0; YIELD_SAMPLES], &trunk),
+            Vec3::ZERO
+        );
+        // Tilted into the trunk, 1 cm in at its top and 5 cm at its bottom: moved by the deepest.
+        let tilted = Capsule::new(
+            Vec3::new(10.0, 10.0, 0.0),
+            Vec3::new(14.0, 40.0, 0.0),
+            5.0,
+            5.0,
+        );
+        let push = push_out_of_trunk(&tilted, &[-4.0; YIELD_SAMPLES], &trunk);
+        assert!((push - Vec3::new(5.0, 0.0, 0.0)).length() < 1e-4, "{push}");
+    }
+
+    #[test]
+    fn a_posed_rig_keeps_its_arms_out_of_its_trunk() {
+        // Walk 02_01 on chidi: in no frame does an arm reach deeper into the trunk than at rest.
+        let clip =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        let motion = Motion::load(&clip).expect("clip");
+        let chidi = Subject::find("chidi").expect("chidi");
+        let rig = BodyRig::for_subject(chidi, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig");
+        let motion = rig.scale_motion(&motion);
+        let mut pose = BodyPose::default();
+        let mut pushed = 0;
+        for f in 0..motion.frame_count() {
+            rig.pose(motion.frame(f), &mut pose);
+            let trunk = rig.trunk_capsules(&pose.capsules);
+            for ((c, p), rest) in pose
+                .capsules
+                .iter()
+                .zip(&rig.proxies)
+                .zip(&rig.rest_overlap)
+            {
+                if p.group == GROUP_ARMS {
+                    for ((depth, _), rest) in trunk_reach(c, &trunk).into_iter().zip(rest) {
+                        assert!(depth <= rest.max(0.0) + 0.05, "frame {f}: {depth} > {rest}");
+                    }
+                    let posed = p.posed(&pose.bones);
+                    pushed += usize::from(posed.a.distance(c.a) > 0.5);
+                }
+            }
+        }
+        // And the walk's lowered arms did need it.
+        assert!(pushed > 0);
+    }
 
     fn part(radii_start: Vec2, radii_end: Vec2, cap: f32) -> BodyPart {
         BodyPart {

