@@ -355,6 +355,18 @@ impl BodyRig {
         Vec3::from(self.skeleton.local_transform(0, frame).translation)
     }
 
+    /// Angle of the turn that takes the root's orientation in frame `a` to that in frame `b`,
+    /// degrees in [0, 180].
+    pub fn root_turn_degrees(&self, a: &[f32], b: &[f32]) -> f32 {
+        if self.skeleton.is_empty() {
+            return 0.0;
+        }
+        let rotation = |frame: &[f32]| {
+            glam::Quat::from_mat3a(&self.skeleton.local_transform(0, frame).matrix3).normalize()
+        };
+        rotation(a).angle_between(rotation(b)).to_degrees()
+    }
+
     /// Poses the body for one frame.
     pub fn pose(&self, frame: &[f32], pose: &mut BodyPose) {
         pose.frame.clear();
