@@ -128,6 +128,10 @@ enum Command {
         /// object touching the person.
         #[arg(long)]
         cloth_reach: Option<f32>,
+        /// How often a stream's first frame is segmented at most, each pass learning from the one
+        /// before (default 8; 2, as before the third session of 2026-12-07).
+        #[arg(long)]
+        first_frame_passes: Option<u32>,
         /// Without the outline's pixels decided by unmixing the colours beside them (as before
         /// the tenth session of 2026-12-06; for comparisons).
         #[arg(long)]
@@ -530,16 +534,23 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
 
 /// The segmenter's options with `suitcap segment`'s overrides of the part memory and the last
 /// look for a head and shoes (nats), the share of the person's own part colours, the edge
-/// snapping's room share for marker colours, the cloth's reach from the markers (cm), the room
-/// model (`no_room`: off) and the outline's unmixing (`no_unmix`: off).
+/// snapping's room share for marker colours, the cloth's reach from the markers (cm), the passes
+/// over a stream's first frame, the room model (`no_room`: off) and the outline's unmixing
+/// (`no_unmix`: off).
 fn segmenter_options(
     (part_memory, part_look): (Option<f32>, Option<f32>),
     part_colours: Option<f32>,
     keep_room_share: Option<f32>,
-    cloth_reach: Option<f32>,
+    (cloth_reach, first_frame_passes): (Option<f32>, Option<u32>),
     (no_room, no_unmix): (bool, bool),
 ) -> anyhow::Result<SegmenterOptions> {
     let mut options = SegmenterOptions::default();
+    if let Some(passes) = first_frame_passes {
+        if passes == 0 {
+            bail!("--first-frame-passes: 0 is not a number of passes (1 or more)");
+        }
+        options.first_frame_passes = passes;
+    }
     if no_room {
         options.room = None;
     }
@@ -983,6 +994,7 @@ fn main() -> ExitCode {
             part_colours,
             keep_room_share,
             cloth_reach,
+            first_frame_passes,
             no_unmix,
             no_room,
             dump_graph,
@@ -991,7 +1003,7 @@ fn main() -> ExitCode {
             (*part_memory, *part_look),
             *part_colours,
             *keep_room_share,
-            *cloth_reach,
+            (*cloth_reach, *first_frame_passes),
             (*no_room, *no_unmix),
         )
         .and_then(|options| {

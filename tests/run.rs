@@ -391,6 +391,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         ("marker colours kept", &["--keep-room-share", "2"][..]),
         ("cloth anywhere", &["--cloth-reach", "0"][..]),
         ("outline not unmixed", &["--no-unmix"][..]),
+        ("first frame once", &["--first-frame-passes", "1"][..]),
     ] {
         let out = tmp.path().join(name);
         let report = succeeded(segment(&out, &all_masks, extra));
@@ -405,6 +406,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         (&["--part-colours", "1.5"][..], "--part-colours"),
         (&["--keep-room-share", "NaN"][..], "--keep-room-share"),
         (&["--cloth-reach=-24"][..], "--cloth-reach"),
+        (&["--first-frame-passes", "0"][..], "--first-frame-passes"),
     ] {
         let output = segment(&out, &all_masks, bad);
         assert!(!output.status.success(), "{bad:?}");

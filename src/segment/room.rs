@@ -39,7 +39,7 @@ pub struct RoomSettings {
     /// (before, every frame counts alike).
     pub rate: f32,
     /// Frames a pixel must have been learned in before it is compared (a stream's first frame,
-    /// which the segmenter segments twice, is learned twice).
+    /// which the segmenter segments in several passes, is learned in each).
     pub min_frames: u16,
     /// Largest difference in any channel (0–255, after the gain) of a pixel that shows the room.
     pub tolerance: f32,

@@ -599,6 +599,43 @@ mod tests {
     }
 
     #[test]
+    fn a_streams_first_frame_is_segmented_again_until_its_mask_settles() {
+        let frames = synthetic_frames(12);
+        let (tables, _) = train_segmenter(
+            &frames[..10],
+            &suit(),
+            1,
+            4,
+            &[],
+            WeightSearch::Pairs,
+            |_| {},
+        )
+        .expect("trains");
+        let first_with = |passes: u32| {
+            let options = SegmenterOptions {
+                first_frame_passes: passes,
+                ..SegmenterOptions::default()
+            };
+            let mut seg = Segmenter::new(tables.clone(), &suit(), options);
+            let first = seg.segment(&frames[10].image);
+            let second = seg.segment(&frames[11].image);
+            assert_eq!(second.passes, 1, "only the first frame");
+            first
+        };
+        assert_eq!(first_with(1).passes, 1);
+        let most = first_with(8);
+        assert!((2..=8).contains(&most.passes), "{}", most.passes);
+        if most.passes < 8 {
+            // It stopped because a pass changed nothing: one more would change nothing either,
+            // and as many passes as it took give the same mask.
+            let settled = first_with(most.passes - 1).mask;
+            assert_eq!(first_with(most.passes).mask, most.mask);
+            assert_eq!(settled, most.mask);
+        }
+        assert!(most.mask.iou(&frames[10].mask) > 0.95);
+    }
+
+    #[test]
     fn the_flow_is_the_cost_of_the_cut_it_returns() {
         let frames = synthetic_frames(6);
         let (tables, _) = train_segmenter(&frames, &suit(), 2, 0, &[], WeightSearch::Pairs, |_| {})
