@@ -108,7 +108,12 @@ fn main() -> anyhow::Result<()> {
         let none: [Capsule; 0] = [];
         let layer = body_renderer.render(&camera, &bv, &bt, &none);
         compositor.composite(&mut view, layer)?;
-        let layer = renderer.render(&camera, &cloth.positions, &cloth.triangles, &cloth.capsules);
+        let layer = renderer.render(
+            &camera,
+            &cloth.positions,
+            &cloth.triangles,
+            &cloth.occluders,
+        );
         compositor.composite(&mut view, layer)?;
         image::imageops::replace(&mut sheet, &view, (v as u32 * size) as i64, 0);
     }

@@ -45,6 +45,23 @@ pub const GROUP_TRUNK: u8 = 0;
 /// Collision group of the arms and hands.
 pub const GROUP_ARMS: u8 = 1;
 
+/// `capsule` (an upper arm, `a` at the shoulder) starting one radius further along its axis, at
+/// most halfway, its radius there as the taper gives it.
+fn without_shoulder_ball(capsule: Capsule) -> Capsule {
+    let axis = capsule.b - capsule.a;
+    let length = axis.length();
+    if length <= 0.0 {
+        return capsule;
+    }
+    let t = (capsule.radius_a / length).min(0.5);
+    Capsule::new(
+        capsule.a + axis * t,
+        capsule.b,
+        capsule.radius_a + (capsule.radius_b - capsule.radius_a) * t,
+        capsule.radius_b,
+    )
+}
+
 /// The collision group of a body part by name: arms (upper arm, forearm, hand) or trunk (the rest).
 ///
 /// The arms rise out of the torso at the shoulders, and a pose may still press an arm against the
@@ -367,6 +384,29 @@ impl BodyRig {
         rotation(a).angle_between(rotation(b)).to_degrees()
     }
 
+    /// The capsules the renderer draws depth-only to hide the garment behind the body
+    /// (`capsules`, posed by [`BodyRig::pose`], in [`BodyRig::proxies`] order), into `out`. Under
+    /// a garment with sleeves each upper arm's capsule starts one radius further down the arm:
+    /// a garment cut in the T-pose has too little cloth over a lowered arm's shoulder, whose
+    /// round top then stands out of the sleeve and would show the real shoulder through the
+    /// garment (the cloth behind it is drawn there instead). Below the ball of the shoulder the
+    /// arm keeps its full thickness, so the real arm still hides what is behind it.
+    pub fn occluders(&self, capsules: &[Capsule], sleeves: bool, out: &mut Vec<Capsule>) {
+        out.clear();
+        out.extend(capsules.iter().zip(&self.proxies).map(|(&capsule, proxy)| {
+            let upper_arm = self
+                .body
+                .parts
+                .get(proxy.part)
+                .is_some_and(|part| part.name.contains("upper_arm"));
+            if sleeves && upper_arm {
+                without_shoulder_ball(capsule)
+            } else {
+                capsule
+            }
+        }));
+    }
+
     /// Poses the body for one frame.
     pub fn pose(&self, frame: &[f32], pose: &mut BodyPose) {
         pose.frame.clear();
@@ -478,6 +518,52 @@ mod tests {
         }
         // And the walk's lowered arms did need it.
         assert!(pushed > 0);
+    }
+
+    #[test]
+    fn under_sleeves_the_upper_arms_hide_the_garment_from_below_the_shoulder_ball() {
+        // A tapered arm 30 cm long, 5 cm thick at the shoulder and 4 cm at the elbow: it starts
+        // 5 cm further down, 4.83 cm thick there, and ends where it did.
+        let arm = Capsule::new(Vec3::ZERO, Vec3::new(0.0, -30.0, 0.0), 5.0, 4.0);
+        let taken = without_shoulder_ball(arm);
+        assert!(taken.a.distance(Vec3::new(0.0, -5.0, 0.0)) < 1e-5);
+        assert!((taken.radius_a - (5.0 - 1.0 / 6.0)).abs() < 1e-5);
+        assert_eq!((taken.b, taken.radius_b), (arm.b, arm.radius_b));
+        // The ball's top is no longer inside; 10 cm down the arm is as thick as before.
+        let top = Vec3::new(0.0, 4.0, 0.0);
+        assert!(arm.signed_distance(top) < 0.0 && taken.signed_distance(top) > 0.0);
+        let side = Vec3::new(4.6, -10.0, 0.0);
+        assert!(arm.signed_distance(side) < 0.0 && taken.signed_distance(side) < 0.0);
+        // A stub shorter than two radii keeps its far half.
+        let stub = Capsule::new(Vec3::ZERO, Vec3::new(0.0, -6.0, 0.0), 5.0, 5.0);
+        assert!(
+            without_shoulder_ball(stub)
+                .a
+                .distance(Vec3::new(0.0, -3.0, 0.0))
+                < 1e-5
+        );
+
+        // On a rig: only the upper arms change, and only under sleeves.
+        let clip =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
+        let motion = Motion::load(&clip).expect("clip");
+        let chidi = Subject::find("chidi").expect("chidi");
+        let rig = BodyRig::for_subject(chidi, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig");
+        let mut pose = BodyPose::default();
+        rig.pose(rig.scale_motion(&motion).frame(5), &mut pose);
+        let mut occluders = Vec::new();
+        rig.occluders(&pose.capsules, false, &mut occluders);
+        assert_eq!(occluders, pose.capsules);
+        rig.occluders(&pose.capsules, true, &mut occluders);
+        let changed: Vec<&str> = pose
+            .capsules
+            .iter()
+            .zip(&occluders)
+            .zip(rig.proxies())
+            .filter(|((a, b), _)| a != b)
+            .map(|(_, p)| rig.body().parts[p.part].name)
+            .collect();
+        assert_eq!(changed, ["right_upper_arm", "left_upper_arm"]);
     }
 
     fn part(radii_start: Vec2, radii_end: Vec2, cap: f32) -> BodyPart {

@@ -174,8 +174,10 @@ pub struct ClothFrame {
     /// World positions (cm); empty unless [`ClothStatus::Worn`].
     pub positions: Vec<Vec3>,
     pub triangles: Arc<Vec<[u32; 3]>>,
-    /// The body's collision capsules this frame (depth-only in the render).
+    /// The body's collision capsules this frame.
     pub capsules: Vec<Capsule>,
+    /// The capsules drawn depth-only in the render ([`BodyRig::occluders`]).
+    pub occluders: Vec<Capsule>,
     pub quality: Option<FrameQuality>,
     /// The garment was dressed again (a jump in the pose, a new garment, the person came back).
     pub redressed: bool,
@@ -189,6 +191,7 @@ impl ClothFrame {
             positions: Vec::new(),
             triangles: Arc::new(Vec::new()),
             capsules: Vec::new(),
+            occluders: Vec::new(),
             quality: None,
             redressed: false,
             milliseconds,
@@ -199,6 +202,8 @@ impl ClothFrame {
 struct Simulation {
     rig: BodyRig,
     cloth: Cloth,
+    /// The garment has sleeves (cuffs): the render hides less of the shoulders.
+    sleeves: bool,
     triangles: Arc<Vec<[u32; 3]>>,
     garment: GarmentChoice,
 }
@@ -328,6 +333,15 @@ impl ClothStage {
             positions: cloth.positions().iter().map(|&p| Vec3::from(p)).collect(),
             triangles: Arc::clone(&simulation.triangles),
             capsules: cloth.pose().capsules.clone(),
+            occluders: {
+                let mut occluders = Vec::new();
+                simulation.rig.occluders(
+                    &cloth.pose().capsules,
+                    simulation.sleeves,
+                    &mut occluders,
+                );
+                occluders
+            },
             quality: Some(cloth.quality()),
             redressed,
             milliseconds: ms(started),
@@ -358,6 +372,7 @@ impl ClothStage {
         )?;
         cloth.check_tunnelling(self.options.check_tunnelling);
         Ok(Simulation {
+            sleeves: !mesh.cuffs.is_empty(),
             triangles: Arc::new(cloth.triangles().to_vec()),
             rig,
             cloth,
@@ -451,7 +466,7 @@ impl RenderStage {
         let worn = matches!(cloth.status, ClothStatus::Worn { .. }) && !cloth.positions.is_empty();
         if worn {
             self.renderer
-                .render(camera, &cloth.positions, &cloth.triangles, &cloth.capsules);
+                .render(camera, &cloth.positions, &cloth.triangles, &cloth.occluders);
         }
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
         let started = Instant::now();
