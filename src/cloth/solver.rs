@@ -3093,8 +3093,9 @@ mod tests {
         );
     }
 
-    #[test]
-    fn a_root_jump_teleports_the_cloth_and_a_pose_jump_dresses_again() {
+    /// A live skirt dressed quickly (4 frames' blend, 2 settling) on the walk's first frame, with
+    /// the rig and that frame.
+    fn skirt_dressed_on_the_walk() -> (BodyRig, Cloth, Vec<f32>) {
         let (rig, frames) = walk();
         let mesh =
             GarmentMesh::generate(GarmentKind::Skirt, &rig, &GarmentParams::live()).expect("skirt");
@@ -3102,8 +3103,14 @@ mod tests {
         settings.blend_frames = 4;
         settings.settle_frames = 2;
         let mut cloth = Cloth::new(&mesh, &Material::medium(), &settings, &rig).expect("cloth");
-        let a = frames.frame(0).to_vec();
-        cloth.dress(&rig, &a);
+        let first = frames.frame(0).to_vec();
+        cloth.dress(&rig, &first);
+        (rig, cloth, first)
+    }
+
+    #[test]
+    fn a_root_jump_teleports_the_cloth_and_a_pose_jump_dresses_again() {
+        let (rig, mut cloth, a) = skirt_dressed_on_the_walk();
         let before = cloth.positions()[0];
         // The root (Xposition is channel 0) jumps 1 m along X.
         let mut b = a.clone();
@@ -3123,7 +3130,7 @@ mod tests {
         assert!(info.redressed);
         assert!(cloth.quality().penetration_cm < 0.02);
         // Other frame intervals run as many fixed substeps as fit.
-        let h = settings.substep_seconds();
+        let h = cloth.settings.substep_seconds();
         assert_eq!(
             cloth.advance(&rig, &t_pose, &t_pose, 0.04).substeps,
             (0.04 / h).round() as u32
@@ -3133,15 +3140,7 @@ mod tests {
 
     #[test]
     fn a_root_turn_too_fast_for_a_person_turns_the_cloth_with_the_body() {
-        let (rig, frames) = walk();
-        let mesh =
-            GarmentMesh::generate(GarmentKind::Skirt, &rig, &GarmentParams::live()).expect("skirt");
-        let mut settings = SolverSettings::live();
-        settings.blend_frames = 4;
-        settings.settle_frames = 2;
-        let mut cloth = Cloth::new(&mesh, &Material::medium(), &settings, &rig).expect("cloth");
-        let a = frames.frame(0).to_vec();
-        cloth.dress(&rig, &a);
+        let (rig, mut cloth, a) = skirt_dressed_on_the_walk();
         let in_root = |cloth: &Cloth| {
             let root = cloth.pose().bones[0].inverse();
             cloth

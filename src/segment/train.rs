@@ -567,10 +567,9 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn learns_a_person_that_moves_over_a_checkerboard() {
-        let frames = synthetic_frames(12);
-        let (tables, report) = train_segmenter(
+    /// Tables from the first ten of `frames`, the last four of them held back for the weights.
+    fn trained_on_the_first_ten(frames: &[TrainingFrame]) -> (SegmenterTables, TrainReport) {
+        train_segmenter(
             &frames[..10],
             &suit(),
             1,
@@ -579,7 +578,13 @@ mod tests {
             WeightSearch::Pairs,
             |_| {},
         )
-        .expect("trains");
+        .expect("trains")
+    }
+
+    #[test]
+    fn learns_a_person_that_moves_over_a_checkerboard() {
+        let frames = synthetic_frames(12);
+        let (tables, report) = trained_on_the_first_ten(&frames);
         assert!(report.chosen_iou >= report.default_iou);
         assert!(report.chosen_iou > 0.95, "{report:?}");
         assert_eq!(report.chosen_validation_iou, None);
@@ -601,16 +606,7 @@ mod tests {
     #[test]
     fn a_streams_first_frame_is_segmented_again_until_its_mask_settles() {
         let frames = synthetic_frames(12);
-        let (tables, _) = train_segmenter(
-            &frames[..10],
-            &suit(),
-            1,
-            4,
-            &[],
-            WeightSearch::Pairs,
-            |_| {},
-        )
-        .expect("trains");
+        let (tables, _) = trained_on_the_first_ten(&frames);
         let first_with = |passes: u32| {
             let options = SegmenterOptions {
                 first_frame_passes: passes,
