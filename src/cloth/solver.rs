@@ -331,7 +331,7 @@ pub struct SolverSettings {
     /// A root turn larger than this in one frame is a jump too (a tracking glitch that spins the
     /// body), degrees: the cloth turns with the root, not whipped through the air. The fastest
     /// turn of the root in the CMU clips we have, at 30 frames/s, is 23.8° (a pirouette, 05_11);
-    /// the quick start's estimated poses once turn 48.9° in a frame and back in the next.
+    /// the quick start's estimated poses once turn 48.9° in a frame and back over the next two.
     pub jump_turn_degrees: f32,
     /// A capsule end moving more than this relative to the root in one frame is a pose jump (a
     /// tracking glitch, or a mocap clip's calibration T-pose frame): the garment is dressed again on

@@ -6,7 +6,8 @@
 //!    and computes colour bins and gradients;
 //! 2. builds the graph: unaries `σ_C·C + σ_G·G + σ_M·M + σ_T·T` per pixel (the motion and temporal terms
 //!    use the segmenter's own masks of the previous one and two frames; the first frame uses the label
-//!    prior and the second the terms it has), pairwise weights from the neighbourhood table on the four
+//!    prior, and is segmented again until its mask settles, each pass learning the room from the
+//!    one before ([`SegmenterOptions::first_frame_passes`]); the second uses the terms it has), pairwise weights from the neighbourhood table on the four
 //!    axial edges (a label-pair energy A, B, D becomes an edge weight (2B − A − D)/2; the (D − A)/2 it
 //!    would add to both nodes' person cost is left out, see [`Segmenter::new`]). The cut looks for the
 //!    suit: its colour table is trained on the suit part of the masks only;
