@@ -121,7 +121,7 @@
 //!      them over a 16 cm ramp (`ARM_RAMP_CM`; 6 cm until the eighth session of 2026-12-06, 10 cm
 //!      until the second of 2026-12-07), because the arms meet the torso at the shoulders and
 //!      no cloth position there is outside both. (Where a pose presses an arm into the torso, the
-//!      arm gives way: [`BodyRig`](super::proxies::BodyRig).) Arm cloth (a sleeve, a dress's
+//!      arm gives way: [`BodyRig`].) Arm cloth (a sleeve, a dress's
 //!      armhole) within 2 cm of the trunk may also lie inside an arm, from the ramp's 16 cm deep on
 //!      the trunk's surface to nothing 2 cm off it (`buried_arm_allowance`): before, the trunk won
 //!      on its surface and the arm pushed everything else out at once, so where a lowered arm sank

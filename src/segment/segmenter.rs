@@ -102,7 +102,7 @@ pub struct SegmenterOptions {
     pub snap: Snapping,
     /// After the snapping, each outline pixel decided by linear unmixing between the colours
     /// sampled inside and outside along the outline's normal (see
-    /// [`unmix_outline`](super::snap::unmix_outline); `None`: not). The masks added up to 8 times
+    /// [`unmix_outline`]; `None`: not). The masks added up to 8 times
     /// as many pixels one pixel outside the true outline as they missed one pixel inside (a blur
     /// of the green cloth and a blue room reads as cyan, a marker's colour, which the snapping
     /// keeps). Chosen on the nine selection renderings (mean IoU; the three validation
