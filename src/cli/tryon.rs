@@ -18,10 +18,12 @@ use suitcap::bvh::Motion;
 use suitcap::camera::Camera;
 use suitcap::cloth::material::Material;
 use suitcap::pipeline::PosePipeline;
-use suitcap::pose::smoothing::{JointLimits, PoseFilter, SmoothingParams, JOINT_LIMITS_FILE};
+use suitcap::pose::smoothing::{
+    repair_root_glitches, JointLimits, PoseFilter, SmoothingParams, JOINT_LIMITS_FILE,
+};
 use suitcap::preview::{GifPreview, PreviewSettings};
 use suitcap::render::RenderSettings;
-use suitcap::skeleton::interpolate_frames;
+use suitcap::skeleton::{interpolate_frames, MAX_ROOT_TURN_DEG_PER_S};
 use suitcap::source::{open_source, FrameSource, SourceOptions};
 use suitcap::tryon::runner::{
     self, Controls, FrameTimes, InputKind, Output, PoseStage, RunSummary,
@@ -256,7 +258,13 @@ pub struct Take {
     last: Option<Placed>,
     /// BVH frames filled in for frames of the clock without a pose.
     held: usize,
+    /// The frames the last [`Take::write`] filled in over root glitches.
+    glitches: Vec<std::ops::Range<usize>>,
 }
+
+/// How long a root glitch may last before the pose it comes back to, seconds
+/// ([`repair_root_glitches`]): the quick start's lasts three frames.
+pub const GLITCH_WINDOW_S: f64 = 0.5;
 
 /// What a take's BVH frames count.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -298,6 +306,7 @@ impl Take {
             first: None,
             last: None,
             held: 0,
+            glitches: Vec::new(),
         })
     }
 
@@ -383,17 +392,42 @@ impl Take {
     /// stage.
     fn recorded_line(&self, path: &Path) -> String {
         format!(
-            "recorded {} frames → {} ({} of them filled in between the poses around them, for frames that were corrupt or that the pipeline or the camera dropped, so the take keeps the camera's time)",
+            "recorded {} frames → {} ({} of them filled in between the poses around them, for frames that were corrupt or that the pipeline or the camera dropped, so the take keeps the camera's time{})",
             self.frames(),
             path.display(),
-            self.held
+            self.held,
+            self.glitches_clause()
         )
     }
 
-    /// Writes the take (atomically) and returns its path.
-    pub fn write(&self) -> anyhow::Result<&Path> {
-        self.motion.write(&self.path)?;
-        Ok(&self.path)
+    /// Writes the take (atomically) and returns its path. The file gets the frames in which the
+    /// whole body turned faster than a person can filled in between the frames around them
+    /// ([`repair_root_glitches`], within [`GLITCH_WINDOW_S`]); the take itself keeps them.
+    pub fn write(&mut self) -> anyhow::Result<PathBuf> {
+        let mut values = self.motion.values().to_vec();
+        let window = (GLITCH_WINDOW_S * self.fps).round().max(1.0) as usize;
+        self.glitches = repair_root_glitches(
+            &self.motion.skeleton,
+            &mut values,
+            MAX_ROOT_TURN_DEG_PER_S / self.fps as f32,
+            window,
+        );
+        Motion::new(self.motion.skeleton.clone(), 1.0 / self.fps, values)?.write(&self.path)?;
+        Ok(self.path.clone())
+    }
+
+    /// "; N BVH frames of M root glitches filled in" after a write that filled any, else "".
+    fn glitches_clause(&self) -> String {
+        let plural =
+            |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+        match self.glitches.iter().map(|g| g.len()).sum::<usize>() {
+            0 => String::new(),
+            frames => format!(
+                "; {} of {} (the whole body turning faster than a person can) filled in between the frames around them",
+                plural(frames, "BVH frame", "BVH frames"),
+                plural(self.glitches.len(), "root glitch", "root glitches")
+            ),
+        }
     }
 }
 
@@ -666,7 +700,7 @@ pub fn run(
         out.display(),
         out.display()
     );
-    finish(summary, failure, bvh)
+    finish(summary, failure, &bvh)
 }
 
 fn count_frames(input: &str) -> Option<u64> {
@@ -683,11 +717,12 @@ fn report(summary: &RunSummary, take: &Take, nobody: usize, timings: &TimingLog)
         n => format!("; {n} BVH frames filled in between the poses around them"),
     };
     println!(
-        "{} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped; {} camera frames dropped{filled}; {:.1} s ({:.1} frames/s)",
+        "{} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped; {} camera frames dropped{filled}{}; {:.1} s ({:.1} frames/s)",
         take.frames(),
         take.path.display(),
         summary.skipped.len(),
         summary.dropped,
+        take.glitches_clause(),
         summary.seconds,
         summary.frames as f64 / summary.seconds.max(1e-9)
     );
@@ -1132,10 +1167,10 @@ pub fn live(
                         controls.switch_garment(garment_choice.clone());
                     }
                     Key::R => match recording.take() {
-                        Some(take) => match take.write() {
+                        Some(mut take) => match take.write() {
                             Ok(path) => {
-                                println!("{}", take.recorded_line(path));
-                                takes_written.push((path.to_owned(), take.frames()));
+                                println!("{}", take.recorded_line(&path));
+                                takes_written.push((path, take.frames()));
                             }
                             Err(e) => {
                                 failure = Some(e);
@@ -1173,7 +1208,7 @@ pub fn live(
             take.hold_to_end(summary.input_frames)?;
         }
         let path = take.write()?;
-        println!("{}", take.recorded_line(path));
+        println!("{}", take.recorded_line(&path));
     }
     println!(
         "{} frames shown, {} camera frames dropped (the pipeline was behind), {} corrupt frames skipped",
@@ -1359,5 +1394,32 @@ mod tests {
         let mut empty = take_on(TakeClock::InputFrames, Some(0));
         empty.hold_to_end(5).unwrap();
         assert_eq!(empty.frames(), 0);
+        // The whole body spun 90° for one frame (the hip's Z rotation is channel 3): the file
+        // gets that frame filled in between its neighbours, the take keeps what was estimated.
+        let dir = tempfile::tempdir().unwrap();
+        let mut spun = Take::new(
+            &skeleton,
+            30.0,
+            TakeClock::InputFrames,
+            dir.path().join("take.bvh"),
+            Some(0),
+        )
+        .unwrap();
+        for (k, z) in [0.0, 2.0, 92.0, 6.0].into_iter().enumerate() {
+            spun.push(k as u64, at_rate(k as u64), &[0.0, 0.0, 0.0, z, 0.0, 0.0])
+                .unwrap();
+        }
+        assert_eq!(spun.glitches_clause(), "");
+        let path = spun.write().unwrap();
+        let written = Motion::load(&path).unwrap();
+        let z: Vec<f32> = written.frames().map(|f| f[3]).collect();
+        assert_eq!(z, [0.0, 2.0, 4.0, 6.0]);
+        assert_eq!(spun.motion.frame(2)[3], 92.0);
+        assert!(
+            spun.glitches_clause()
+                .contains("1 BVH frame of 1 root glitch"),
+            "{}",
+            spun.glitches_clause()
+        );
     }
 }

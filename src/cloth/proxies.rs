@@ -375,13 +375,7 @@ impl BodyRig {
     /// Angle of the turn that takes the root's orientation in frame `a` to that in frame `b`,
     /// degrees in [0, 180].
     pub fn root_turn_degrees(&self, a: &[f32], b: &[f32]) -> f32 {
-        if self.skeleton.is_empty() {
-            return 0.0;
-        }
-        let rotation = |frame: &[f32]| {
-            glam::Quat::from_mat3a(&self.skeleton.local_transform(0, frame).matrix3).normalize()
-        };
-        rotation(a).angle_between(rotation(b)).to_degrees()
+        self.skeleton.root_turn_degrees(a, b)
     }
 
     /// The capsules the renderer draws depth-only to hide the garment behind the body

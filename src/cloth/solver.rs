@@ -233,6 +233,7 @@ use glam::{Affine3A, Vec3, Vec3A};
 
 use crate::body::{MissingJoint, Subject};
 use crate::bvh::{Motion, ResampleError};
+use crate::skeleton::MAX_ROOT_TURN_DEG_PER_S;
 
 use super::capsule::{Aabb, Capsule, PreparedCapsule};
 use super::garment::{Anchor, GarmentError, GarmentKind, GarmentMesh, GarmentParams};
@@ -329,9 +330,9 @@ pub struct SolverSettings {
     /// the root, cm.
     pub jump_distance_cm: f32,
     /// A root turn larger than this in one frame is a jump too (a tracking glitch that spins the
-    /// body), degrees: the cloth turns with the root, not whipped through the air. The fastest
-    /// turn of the root in the CMU clips we have, at 30 frames/s, is 23.8° (a pirouette, 05_11);
-    /// the quick start's estimated poses once turn 48.9° in a frame and back over the next two.
+    /// body), degrees: the cloth turns with the root, not whipped through the air. By default
+    /// what a person can turn in a frame ([`MAX_ROOT_TURN_DEG_PER_S`]); the quick start's
+    /// estimated poses once turn 48.9° in a frame and back over the next two.
     pub jump_turn_degrees: f32,
     /// A capsule end moving more than this relative to the root in one frame is a pose jump (a
     /// tracking glitch, or a mocap clip's calibration T-pose frame): the garment is dressed again on
@@ -402,7 +403,7 @@ impl SolverSettings {
             chebyshev_rho: 0.75,
             compression: 0.8,
             jump_distance_cm: 50.0,
-            jump_turn_degrees: 35.0,
+            jump_turn_degrees: MAX_ROOT_TURN_DEG_PER_S / 30.0,
             pose_jump_cm: 60.0,
             blend_frames: 30,
             settle_frames: 20,

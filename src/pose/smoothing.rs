@@ -14,6 +14,9 @@
 //!   Stored as `joint_limits.toml` (with a format version) and applied as clamps in the unwrapped space
 //!   around the range's centre. The root's rotation (the person's heading in the room) and every
 //!   position channel are never limited.
+//! * [`repair_root_glitches`], for a recorded take before it is written: frames in which the
+//!   whole body turns faster than a person can (the regressor flipping the heading for a frame or
+//!   a few) are filled in between the frames around them, which a causal filter cannot do.
 //! * [`PoseFilter`]: both, per BVH channel of one skeleton, each switchable (`Option`) and resettable
 //!   ([`PoseFilter::reset`], e.g. on tracking loss, so the filter does not glide from a stale pose).
 //!   Each frame is clamped, smoothed, and clamped again; it hands the frame back in place.
@@ -24,7 +27,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::bvh::Motion;
-use crate::skeleton::{Channel, Skeleton};
+use crate::skeleton::{interpolate_frames, Channel, Skeleton};
 
 /// Version of the `joint_limits.toml` format.
 pub const JOINT_LIMITS_VERSION: u32 = 1;
@@ -43,6 +46,60 @@ pub fn wrap_degrees(a: f64) -> f64 {
     } else {
         w
     }
+}
+
+/// Fills in the frames of `values` (frames of `skeleton`'s channels, one after another) in which
+/// the root turned faster than `max_turn_deg` a frame: a tracking glitch, as no person turns that
+/// fast (see [`crate::skeleton::MAX_ROOT_TURN_DEG_PER_S`]). A frame that turns more than that from
+/// the frame before starts a glitch; it ends at the first frame within `window` frames after it
+/// that the frame before the glitch reaches at that speed (at most `max_turn_deg` times the frames
+/// between them), and the frames between are filled in between those two, every channel
+/// (rotations the short way). So a glitch that comes back is taken out, and a turn that stays is
+/// spread over as many frames as a person would need; one that no frame within the window
+/// reaches at that speed is left as it is. Returns the frame ranges filled in.
+pub fn repair_root_glitches(
+    skeleton: &Skeleton,
+    values: &mut [f32],
+    max_turn_deg: f32,
+    window: usize,
+) -> Vec<std::ops::Range<usize>> {
+    let n = skeleton.channel_count();
+    if n == 0 || max_turn_deg.is_nan() || max_turn_deg <= 0.0 {
+        return Vec::new();
+    }
+    let frames = values.len() / n;
+    let rotation = skeleton.rotation_channels();
+    let turn = |values: &[f32], i: usize, j: usize| {
+        skeleton.root_turn_degrees(&values[i * n..(i + 1) * n], &values[j * n..(j + 1) * n])
+    };
+    let mut spans = Vec::new();
+    let mut filled = Vec::with_capacity(n);
+    let mut k = 1;
+    while k < frames {
+        let good = k - 1;
+        if turn(values, good, k) <= max_turn_deg {
+            k += 1;
+            continue;
+        }
+        let back = (k + 1..frames.min(k + 1 + window))
+            .find(|&j| turn(values, good, j) <= max_turn_deg * (j - good) as f32);
+        let Some(end) = back else {
+            k += 1;
+            continue;
+        };
+        let (a, b) = (
+            values[good * n..(good + 1) * n].to_vec(),
+            values[end * n..(end + 1) * n].to_vec(),
+        );
+        for m in k..end {
+            let t = (m - good) as f32 / (end - good) as f32;
+            interpolate_frames(&rotation, &a, &b, t, &mut filled);
+            values[m * n..(m + 1) * n].copy_from_slice(&filled);
+        }
+        spans.push(k..end);
+        k = end;
+    }
+    spans
 }
 
 /// Parameters of one One-Euro filter (cutoffs in Hz; `beta` in 1 / (signal unit)).
@@ -576,6 +633,73 @@ mod tests {
     use crate::skeleton::tests::two_joint_arm;
 
     const DT: f64 = 1.0 / 30.0;
+
+    /// Frames of the two-joint arm turning its root about the vertical by `yaw` degrees, the
+    /// elbow bent by the frame's index.
+    fn turning(yaw: &[f32]) -> Vec<f32> {
+        yaw.iter()
+            .enumerate()
+            .flat_map(|(k, &y)| [0.0, 0.0, 0.0, 0.0, y, 0.0, k as f32, 0.0, 0.0])
+            .collect()
+    }
+
+    #[test]
+    fn a_turn_faster_than_a_person_is_filled_in_between_the_frames_around_it() {
+        let arm = two_joint_arm();
+        let yaw_of = |values: &[f32]| values.chunks(9).map(|f| f[4]).collect::<Vec<_>>();
+        // A glitch that comes back: frame 2 is filled in halfway between frames 1 and 3, the
+        // elbow too.
+        let mut glitch = turning(&[0.0, 0.0, 90.0, 5.0, 10.0]);
+        glitch[2 * 9 + 6] = 40.0;
+        assert_eq!(
+            repair_root_glitches(&arm, &mut glitch, 35.0, 15),
+            vec![2..3]
+        );
+        assert_eq!(yaw_of(&glitch), [0.0, 0.0, 2.5, 5.0, 10.0]);
+        assert_eq!(glitch[2 * 9 + 6], 2.0);
+        // A turn that stays is spread over three frames, 30° each.
+        let mut step = turning(&[0.0, 0.0, 90.0, 90.0, 90.0]);
+        assert_eq!(repair_root_glitches(&arm, &mut step, 35.0, 15), vec![2..4]);
+        let yaw = yaw_of(&step);
+        assert!(
+            (yaw[2] - 30.0).abs() < 1e-4 && (yaw[3] - 60.0).abs() < 1e-4,
+            "{yaw:?}"
+        );
+        // ... unless the window is too short to reach it; turns a person can make stay.
+        let mut short = turning(&[0.0, 0.0, 90.0, 90.0]);
+        assert!(repair_root_glitches(&arm, &mut short, 35.0, 1).is_empty());
+        assert_eq!(yaw_of(&short), [0.0, 0.0, 90.0, 90.0]);
+        let mut fast = turning(&[0.0, 30.0, 60.0, 30.0]);
+        assert!(repair_root_glitches(&arm, &mut fast, 35.0, 15).is_empty());
+        // The short way round: 170° to −170° is a 20° turn.
+        let mut across = turning(&[150.0, 170.0, -170.0]);
+        assert!(repair_root_glitches(&arm, &mut across, 35.0, 15).is_empty());
+    }
+
+    #[test]
+    fn real_motion_has_no_root_glitches() {
+        for clip in [
+            "cmu_02_01_walk.bvh",
+            "cmu_10_03_kick_ball.bvh",
+            "cmu_13_39_jump.bvh",
+        ] {
+            let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("tests/data/mocap")
+                .join(clip);
+            let motion = Motion::load(&path).expect("clip");
+            let (motion, _) = motion
+                .resample(crate::bvh::CMU_CALIBRATION_FRAMES, None, 30.0)
+                .expect("resample");
+            let mut values = motion.values().to_vec();
+            let spans = repair_root_glitches(
+                &motion.skeleton,
+                &mut values,
+                crate::skeleton::MAX_ROOT_TURN_DEG_PER_S / 30.0,
+                15,
+            );
+            assert!(spans.is_empty(), "{clip}: {spans:?}");
+        }
+    }
 
     fn run(filter: &mut OneEuro, xs: &[f64]) -> Vec<f64> {
         xs.iter().map(|&x| filter.filter(x, DT)).collect()
