@@ -53,7 +53,8 @@ pub struct GarmentArgs {
 /// Options of the pose stage.
 #[derive(Args, Clone, Debug)]
 pub struct PoseArgs {
-    /// Switch off the One-Euro smoothing of the pose.
+    /// Switch off the One-Euro smoothing of the pose, and the filling in of the frames in which the
+    /// whole body turns faster than a person can in the written take.
     #[arg(long)]
     pub no_smoothing: bool,
     /// Switch off the joint limits (SUIT/joint_limits.toml).
@@ -258,6 +259,8 @@ pub struct Take {
     last: Option<Placed>,
     /// BVH frames filled in for frames of the clock without a pose.
     held: usize,
+    /// Whether [`Take::write`] fills in root glitches.
+    repair_glitches: bool,
     /// The frames the last [`Take::write`] filled in over root glitches.
     glitches: Vec<std::ops::Range<usize>>,
 }
@@ -306,8 +309,15 @@ impl Take {
             first: None,
             last: None,
             held: 0,
+            repair_glitches: true,
             glitches: Vec::new(),
         })
+    }
+
+    /// The take with the filling in of root glitches on write switched on or off (on by default).
+    pub fn repairing_glitches(mut self, on: bool) -> Take {
+        self.repair_glitches = on;
+        self
     }
 
     /// The BVH frame for input frame `index` shown at `time_s` into the stream. The first pose
@@ -406,12 +416,16 @@ impl Take {
     pub fn write(&mut self) -> anyhow::Result<PathBuf> {
         let mut values = self.motion.values().to_vec();
         let window = (GLITCH_WINDOW_S * self.fps).round().max(1.0) as usize;
-        self.glitches = repair_root_glitches(
-            &self.motion.skeleton,
-            &mut values,
-            MAX_ROOT_TURN_DEG_PER_S / self.fps as f32,
-            window,
-        );
+        self.glitches = if self.repair_glitches {
+            repair_root_glitches(
+                &self.motion.skeleton,
+                &mut values,
+                MAX_ROOT_TURN_DEG_PER_S / self.fps as f32,
+                window,
+            )
+        } else {
+            Vec::new()
+        };
         Motion::new(self.motion.skeleton.clone(), 1.0 / self.fps, values)?.write(&self.path)?;
         Ok(self.path.clone())
     }
@@ -607,7 +621,8 @@ pub fn run(
     drop(probe);
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let template = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
-    let mut take = Take::new(&template, fps, clock, out.join("take.bvh"), Some(0))?;
+    let mut take = Take::new(&template, fps, clock, out.join("take.bvh"), Some(0))?
+        .repairing_glitches(!pose.no_smoothing);
     let mut outputs = RunOutputs::new(out, fps)?;
     let controls = Controls::new(parse_overlays(&garment.overlays)?);
     stop_on_signals(&controls);
@@ -1081,13 +1096,16 @@ pub fn live(
     let mut takes_written: Vec<(PathBuf, usize)> = Vec::new();
     let template_pipeline_skeleton = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
     let mut recording: Option<Take> = match record {
-        Some(path) => Some(Take::new(
-            &template_pipeline_skeleton,
-            rate,
-            TakeClock::CaptureTime,
-            path.clone(),
-            Some(0),
-        )?),
+        Some(path) => Some(
+            Take::new(
+                &template_pipeline_skeleton,
+                rate,
+                TakeClock::CaptureTime,
+                path.clone(),
+                Some(0),
+            )?
+            .repairing_glitches(!pose.no_smoothing),
+        ),
         None => None,
     };
     let recording_flag = Arc::new(std::sync::atomic::AtomicBool::new(recording.is_some()));
@@ -1186,7 +1204,9 @@ pub fn live(
                                 path,
                                 None,
                             ) {
-                                Ok(take) => recording = Some(take),
+                                Ok(take) => {
+                                    recording = Some(take.repairing_glitches(!pose.no_smoothing))
+                                }
                                 Err(e) => eprintln!(
                                     "cannot start recording: {}",
                                     suitcap::io::error_line(e.as_ref())
@@ -1420,6 +1440,18 @@ mod tests {
                 .contains("1 BVH frame of 1 root glitch"),
             "{}",
             spun.glitches_clause()
+        );
+        // Switched off (--no-smoothing), the file keeps the spin.
+        let mut raw = spun.repairing_glitches(false);
+        let path = raw.write().unwrap();
+        let z: Vec<f32> = Motion::load(&path)
+            .unwrap()
+            .frames()
+            .map(|f| f[3])
+            .collect();
+        assert_eq!(
+            (z, raw.glitches_clause()),
+            (vec![0.0, 2.0, 92.0, 6.0], String::new())
         );
     }
 }
