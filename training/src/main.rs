@@ -214,6 +214,10 @@ struct SegmentRun {
     /// once; `coordinate` one at a time only (faster, and often a worse optimum).
     #[arg(long, value_enum, default_value_t = SearchArg::Pairs)]
     search: SearchArg,
+    /// At most this many frames of each `--validate` sequence are scored in the search (at least
+    /// 24; the search's time grows with them).
+    #[arg(long, default_value_t = MAX_VALIDATION_FRAMES)]
+    validate_frames: usize,
 }
 
 fn segment(
@@ -228,6 +232,7 @@ fn segment(
         held_back,
         downscale,
         search,
+        validate_frames,
     } = run;
     let search = WeightSearch::from(search);
     let suit = SuitDefinition::load_dir(suit_dir)?;
@@ -245,7 +250,7 @@ fn segment(
         let (image, mask) = frame_and_mask(&dataset, index)?;
         training.push(TrainingFrame { image, mask });
     }
-    let validation = validation_frames(validate)?;
+    let validation = validation_frames(validate, validate_frames)?;
     let started = std::time::Instant::now();
     // The search runs the segmenter hundreds of times (minutes with other sequences to score).
     let bar = indicatif::ProgressBar::new_spinner();
@@ -327,10 +332,10 @@ fn segment(
 }
 
 /// The first run of at least [`MIN_VALIDATION_FRAMES`] consecutive frames with masks, cut at
-/// [`MAX_VALIDATION_FRAMES`].
-fn validation_run(dataset: &Dataset) -> Option<std::ops::Range<usize>> {
+/// `most` frames.
+fn validation_run(dataset: &Dataset, most: usize) -> Option<std::ops::Range<usize>> {
     let start = first_labelled_run(dataset, MIN_VALIDATION_FRAMES)?;
-    let limit = dataset.frame_count().min(start + MAX_VALIDATION_FRAMES);
+    let limit = dataset.frame_count().min(start + most);
     let end = (start..limit)
         .find(|&index| !dataset.has_mask(index))
         .unwrap_or(limit);
@@ -339,11 +344,14 @@ fn validation_run(dataset: &Dataset) -> Option<std::ops::Range<usize>> {
 
 /// The frames of other sequences the segmenter's weights are also scored on: each dataset's
 /// [`validation_run`].
-fn validation_frames(dirs: &[PathBuf]) -> anyhow::Result<Vec<Vec<TrainingFrame>>> {
+fn validation_frames(dirs: &[PathBuf], most: usize) -> anyhow::Result<Vec<Vec<TrainingFrame>>> {
+    if most < MIN_VALIDATION_FRAMES {
+        bail!("--validate-frames {most}: at least {MIN_VALIDATION_FRAMES} frames of each --validate sequence are scored");
+    }
     dirs.iter()
         .map(|dir| {
             let dataset = Dataset::open(dir)?;
-            let run = validation_run(&dataset).with_context(|| {
+            let run = validation_run(&dataset, most).with_context(|| {
                 format!(
                     "{}: no {MIN_VALIDATION_FRAMES} consecutive frames with masks to score the segmenter's weights on",
                     dir.display()
@@ -968,6 +976,10 @@ struct SuitRun {
     /// chosen on the 6 held-back frames of the training sequence alone.
     #[arg(long)]
     validate: Vec<PathBuf>,
+    /// As `segment --validate-frames`: at most this many frames of each `--validate` sequence
+    /// are scored in the search.
+    #[arg(long, default_value_t = MAX_VALIDATION_FRAMES)]
+    validate_frames: usize,
     /// How the pose vector writes each joint's rotation: `matrix` (default, as the default suit
     /// is trained: the first two columns of the rotation matrix, continuous where a raised arm's
     /// Euler angles jump; 0.2–0.3° better on held-back and novel motions) or `euler` (the paper's
@@ -987,6 +999,7 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         masks,
         search,
         ref validate,
+        validate_frames,
         rotations,
     } = *run;
     let rotations = RotationEncoding::from(rotations);
@@ -1031,6 +1044,7 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
             held_back: 6,
             downscale: 2,
             search,
+            validate_frames,
         };
         segment(suit_dir, dir, &run, validate)?;
     } else {
@@ -1943,8 +1957,8 @@ fn main() -> ExitCode {
 #[cfg(test)]
 mod tests {
     use super::{
-        clip_indices, frames_csv, held_back, training_set, training_size_warning, validation_run,
-        worst_frame, FrameError,
+        clip_indices, frames_csv, held_back, training_set, training_size_warning,
+        validation_frames, validation_run, worst_frame, FrameError,
     };
     use std::path::{Path, PathBuf};
     use suitcap::descriptor::{Codebooks, DescriptorKind};
@@ -1977,14 +1991,21 @@ mod tests {
         generate(&walk(&out, 40, 160, 120), &|| {}).expect("dataset");
         let open = || suitcap::dataset::Dataset::open(&out).expect("reopens");
         let unmask = |index: usize| std::fs::remove_file(open().mask_path(index)).expect("remove");
-        assert_eq!(validation_run(&open()), Some(0..40));
+        assert_eq!(validation_run(&open(), 60), Some(0..40));
+        assert_eq!(validation_run(&open(), 30), Some(0..30));
         // Frames 3..30 (27 of them) are the first run of at least 24 masked frames.
         unmask(2);
         unmask(30);
-        assert_eq!(validation_run(&open()), Some(3..30));
+        assert_eq!(validation_run(&open(), 60), Some(3..30));
+        assert_eq!(validation_run(&open(), 24), Some(3..27));
         // Runs of 17, 9 and 9: none is long enough.
         unmask(20);
-        assert_eq!(validation_run(&open()), None);
+        assert_eq!(validation_run(&open(), 60), None);
+        // Fewer than 24 frames a sequence is not a validation.
+        let err = validation_frames(std::slice::from_ref(&out), 23)
+            .expect_err("too few")
+            .to_string();
+        assert!(err.contains("--validate-frames 23"), "{err}");
     }
 
     #[test]
