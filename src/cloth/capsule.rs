@@ -86,6 +86,15 @@ impl Capsule {
         }
     }
 
+    /// The centre and radius of the sphere a fraction `t` of the way from `a` to `b`: the capsule
+    /// is the union of these spheres for `t` in [0, 1].
+    pub fn sphere_at(&self, t: f32) -> (Vec3, f32) {
+        (
+            self.a.lerp(self.b, t),
+            self.radius_a + (self.radius_b - self.radius_a) * t,
+        )
+    }
+
     /// Exact signed distance from `p` to the surface, negative inside.
     pub fn signed_distance(&self, p: Vec3) -> f32 {
         self.prepared().distance(p.into())

@@ -405,9 +405,7 @@ fn section(capsules: &[Capsule], y: f32) -> Vec<(Vec2, f32)> {
     let mut out = Vec::new();
     for c in capsules {
         for k in 0..=SAMPLES {
-            let t = k as f32 / SAMPLES as f32;
-            let centre = c.a.lerp(c.b, t);
-            let r = c.radius_a + (c.radius_b - c.radius_a) * t;
+            let (centre, r) = c.sphere_at(k as f32 / SAMPLES as f32);
             let dy = y - centre.y;
             if dy.abs() < r {
                 out.push((Vec2::new(centre.x, centre.z), (r * r - dy * dy).sqrt()));
@@ -899,10 +897,7 @@ fn build_sleeve(
         .fold(f32::NEG_INFINITY, f32::max);
     let end = (0.55 * upper_arm).max(start + 2.0 * params.edge_cm);
     let rings = (((end - start) / params.edge_cm).round() as usize).max(2);
-    let arm_at = |a: f32| {
-        let t = (a / upper_arm.max(1e-3)).clamp(0.0, 1.0);
-        arm.radius_a + (arm.radius_b - arm.radius_a) * t
-    };
+    let arm_at = |a: f32| arm.sphere_at((a / upper_arm.max(1e-3)).clamp(0.0, 1.0)).1;
     let end_radius = arm_at(end) + params.ease_cm;
     let around = ((std::f32::consts::TAU * 0.5 * (mean_radius + end_radius) / params.edge_cm)
         .round() as usize)

@@ -48,18 +48,12 @@ pub const GROUP_ARMS: u8 = 1;
 /// `capsule` (an upper arm, `a` at the shoulder) starting one radius further along its axis, at
 /// most halfway, its radius there as the taper gives it.
 fn without_shoulder_ball(capsule: Capsule) -> Capsule {
-    let axis = capsule.b - capsule.a;
-    let length = axis.length();
+    let length = capsule.a.distance(capsule.b);
     if length <= 0.0 {
         return capsule;
     }
-    let t = (capsule.radius_a / length).min(0.5);
-    Capsule::new(
-        capsule.a + axis * t,
-        capsule.b,
-        capsule.radius_a + (capsule.radius_b - capsule.radius_a) * t,
-        capsule.radius_b,
-    )
+    let (a, radius_a) = capsule.sphere_at((capsule.radius_a / length).min(0.5));
+    Capsule::new(a, capsule.b, radius_a, capsule.radius_b)
 }
 
 /// The collision group of a body part by name: arms (upper arm, forearm, hand) or trunk (the rest).
@@ -209,9 +203,8 @@ const YIELD_SAMPLES: usize = 5;
 /// tested against a dozen).
 fn trunk_reach(arm: &Capsule, trunk: &[PreparedCapsule]) -> [(f32, Vec3A); YIELD_SAMPLES] {
     std::array::from_fn(|k| {
-        let t = k as f32 / (YIELD_SAMPLES - 1) as f32;
-        let point = Vec3A::from(arm.a.lerp(arm.b, t));
-        let radius = arm.radius_a + (arm.radius_b - arm.radius_a) * t;
+        let (centre, radius) = arm.sphere_at(k as f32 / (YIELD_SAMPLES - 1) as f32);
+        let point = Vec3A::from(centre);
         let mut deepest: Option<(f32, &PreparedCapsule)> = None;
         for capsule in trunk {
             let depth = radius - capsule.distance(point);
