@@ -474,15 +474,21 @@ mod tests {
         assert!((push - Vec3::new(5.0, 0.0, 0.0)).length() < 1e-4, "{push}");
     }
 
-    #[test]
-    fn a_posed_rig_keeps_its_arms_out_of_its_trunk() {
-        // Walk 02_01 on chidi: in no frame does an arm reach deeper into the trunk than at rest.
+    /// Subject chidi's rig on CMU walk 02_01's skeleton, and the walk scaled to it.
+    fn chidi_walking() -> (BodyRig, Motion) {
         let clip =
             Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
         let motion = Motion::load(&clip).expect("clip");
         let chidi = Subject::find("chidi").expect("chidi");
         let rig = BodyRig::for_subject(chidi, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig");
         let motion = rig.scale_motion(&motion);
+        (rig, motion)
+    }
+
+    #[test]
+    fn a_posed_rig_keeps_its_arms_out_of_its_trunk() {
+        // Walk 02_01 on chidi: in no frame does an arm reach deeper into the trunk than at rest.
+        let (rig, motion) = chidi_walking();
         let mut pose = BodyPose::default();
         let mut pushed = 0;
         for f in 0..motion.frame_count() {
@@ -531,13 +537,9 @@ mod tests {
         );
 
         // On a rig: only the upper arms change, and only under sleeves.
-        let clip =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
-        let motion = Motion::load(&clip).expect("clip");
-        let chidi = Subject::find("chidi").expect("chidi");
-        let rig = BodyRig::for_subject(chidi, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig");
+        let (rig, motion) = chidi_walking();
         let mut pose = BodyPose::default();
-        rig.pose(rig.scale_motion(&motion).frame(5), &mut pose);
+        rig.pose(motion.frame(5), &mut pose);
         let mut occluders = Vec::new();
         rig.occluders(&pose.capsules, false, &mut occluders);
         assert_eq!(occluders, pose.capsules);
@@ -618,11 +620,7 @@ mod tests {
 
     #[test]
     fn rotations_interpolate_the_short_way() {
-        let clip =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mocap/cmu_02_01_walk.bvh");
-        let motion = Motion::load(&clip).expect("clip");
-        let subject = Subject::find("chidi").expect("chidi");
-        let rig = BodyRig::for_subject(subject, &motion.skeleton, DEFAULT_MARGIN_CM).expect("rig");
+        let (rig, _) = chidi_walking();
         let n = rig.skeleton().channel_count();
         let mut a = vec![0.0; n];
         let mut b = vec![0.0; n];
