@@ -256,8 +256,10 @@ const INTERLEAVE_WINDOW: usize = 256;
 /// outcome swings with any change: the folds are chaotic), and at 16 cm none, with the largest
 /// strain 9.08 % (9.82 % at 2,100 and 3,900 vertices instead of 2,000 and 4,000). (10 cm, chosen
 /// in the eighth session of 2026-12-06 for the body whose arms lay inside the chest, had replaced
-/// 6 cm.) The wider ramp lets the sleeve's top sink into the shoulder, which shows through it in
-/// places.
+/// 6 cm.) The top of a lowered shoulder stands out of the sleeve (a shirt cut in the T-pose has
+/// too little cloth over it); limiting the ramp to cloth near the trunk covered it but broke the
+/// strain targets (docs/measurements.md, third session of 2026-12-07), so the renderer draws the
+/// shirt over it instead ([`BodyRig::occluders`](super::proxies::BodyRig::occluders)).
 const ARM_RAMP_CM: f32 = 16.0;
 
 /// Cloth this close to the trunk's collision surface lies on the trunk, cm.
