@@ -132,6 +132,11 @@ enum Command {
         /// before (default 8; 2, as before the third session of 2026-12-07).
         #[arg(long)]
         first_frame_passes: Option<u32>,
+        /// Fill holes in the final mask up to this many markers' areas that are mostly of the
+        /// suit's colours (default 4; 0 switches it off, as before the fourth session of
+        /// 2026-12-07).
+        #[arg(long)]
+        suit_holes: Option<f32>,
         /// Without the outline's pixels decided by unmixing the colours beside them (as before
         /// the tenth session of 2026-12-06; for comparisons).
         #[arg(long)]
@@ -535,12 +540,12 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
 /// The segmenter's options with `suitcap segment`'s overrides of the part memory and the last
 /// look for a head and shoes (nats), the share of the person's own part colours, the edge
 /// snapping's room share for marker colours, the cloth's reach from the markers (cm), the passes
-/// over a stream's first frame, the room model (`no_room`: off) and the outline's unmixing
-/// (`no_unmix`: off).
+/// over a stream's first frame, the room model (`no_room`: off), the outline's unmixing
+/// (`no_unmix`: off) and the largest hole of the suit's colours filled (markers' areas).
 fn segmenter_options(
     (part_memory, part_look): (Option<f32>, Option<f32>),
     part_colours: Option<f32>,
-    keep_room_share: Option<f32>,
+    (keep_room_share, suit_holes): (Option<f32>, Option<f32>),
     (cloth_reach, first_frame_passes): (Option<f32>, Option<u32>),
     (no_room, no_unmix): (bool, bool),
 ) -> anyhow::Result<SegmenterOptions> {
@@ -585,6 +590,9 @@ fn segmenter_options(
     if let Some(cm) = cloth_reach {
         options.cloth_reach_cm = at_least_zero("--cloth-reach", cm, "number of cm")?;
     }
+    if let Some(markers) = suit_holes {
+        options.suit_hole_markers = at_least_zero("--suit-holes", markers, "number of markers")?;
+    }
     Ok(options)
 }
 
@@ -623,7 +631,7 @@ fn segment(
     let mut unscored = 0usize;
     let (mut cleaned_frames, mut removed_px, mut filled_px, mut empty_frames) =
         (0usize, 0usize, 0usize, 0usize);
-    let (mut off_cloth_px, mut far_px) = (0usize, 0usize);
+    let (mut off_cloth_px, mut far_px, mut suit_hole_px) = (0usize, 0usize, 0usize);
     // The last frame's height, for the cut's factor in the summary.
     let mut last_height = None;
     loop {
@@ -649,7 +657,11 @@ fn segment(
         last_height = Some(frame.image.height());
         times.push(result.times);
         let c = result.cleanup;
-        if c.components_removed + c.holes_filled + c.off_cloth_pieces + c.far_from_markers_pixels
+        if c.components_removed
+            + c.holes_filled
+            + c.off_cloth_pieces
+            + c.far_from_markers_pixels
+            + c.suit_holes_filled
             > 0
         {
             cleaned_frames += 1;
@@ -657,6 +669,7 @@ fn segment(
         removed_px += c.pixels_removed;
         off_cloth_px += c.off_cloth_pixels;
         far_px += c.far_from_markers_pixels;
+        suit_hole_px += c.suit_hole_pixels;
         filled_px += c.pixels_filled;
         empty_frames += result.mask.is_empty() as usize;
         let path = out.join(&name);
@@ -691,7 +704,8 @@ fn segment(
         "clean-up (largest marker-carrying region kept, small holes filled, pieces not cloth and larger than a \
          few markers removed, cloth far from every marker removed) changed {cleaned_frames} frames: \
          {removed_px} stray person pixels removed, {filled_px} hole pixels filled, {off_cloth_px} pixels of \
-         large pieces not cloth removed, {far_px} pixels of cloth far from the markers removed (on {grid})"
+         large pieces not cloth removed, {far_px} pixels of cloth far from the markers removed (on {grid}); \
+         {suit_hole_px} frame pixels of holes of the suit's colours filled"
     );
     if !times.is_empty() {
         let stage_median =
@@ -995,6 +1009,7 @@ fn main() -> ExitCode {
             keep_room_share,
             cloth_reach,
             first_frame_passes,
+            suit_holes,
             no_unmix,
             no_room,
             dump_graph,
@@ -1002,7 +1017,7 @@ fn main() -> ExitCode {
         } => segmenter_options(
             (*part_memory, *part_look),
             *part_colours,
-            *keep_room_share,
+            (*keep_room_share, *suit_holes),
             (*cloth_reach, *first_frame_passes),
             (*no_room, *no_unmix),
         )

@@ -392,6 +392,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         ("cloth anywhere", &["--cloth-reach", "0"][..]),
         ("outline not unmixed", &["--no-unmix"][..]),
         ("first frame once", &["--first-frame-passes", "1"][..]),
+        ("no suit holes filled", &["--suit-holes", "0"][..]),
     ] {
         let out = tmp.path().join(name);
         let report = succeeded(segment(&out, &all_masks, extra));
@@ -407,6 +408,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         (&["--keep-room-share", "NaN"][..], "--keep-room-share"),
         (&["--cloth-reach=-24"][..], "--cloth-reach"),
         (&["--first-frame-passes", "0"][..], "--first-frame-passes"),
+        (&["--suit-holes=-2"][..], "--suit-holes"),
     ] {
         let output = segment(&out, &all_masks, bad);
         assert!(!output.status.success(), "{bad:?}");

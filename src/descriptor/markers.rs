@@ -69,6 +69,7 @@ use image::RgbImage;
 
 use crate::dataset::MarkerRecord;
 use crate::mask::Mask;
+use crate::segment::cleanup::find_root;
 use crate::segment::features::{ColourLut, MarkerGate, PixelColour};
 use crate::suit::SuitDefinition;
 
@@ -610,8 +611,8 @@ impl Scratch {
                     if self.labels[j] != fragment.colour || self.fragment_of[j] == f as u32 {
                         continue;
                     }
-                    let a = find(&mut self.parent, f as u32);
-                    let b = find(&mut self.parent, self.fragment_of[j]);
+                    let a = find_root(&mut self.parent, f as u32);
+                    let b = find_root(&mut self.parent, self.fragment_of[j]);
                     let (area_a, area_b) = (self.group_area[a], self.group_area[b]);
                     if a != b && area_a.min(area_b) < sliver_area {
                         let (root, child) = if area_a >= area_b { (a, b) } else { (b, a) };
@@ -625,7 +626,7 @@ impl Scratch {
         self.slot.resize(self.fragments.len(), usize::MAX);
         let mut components: Vec<Fragment> = Vec::with_capacity(self.fragments.len());
         for f in 0..self.fragments.len() {
-            let root = find(&mut self.parent, f as u32);
+            let root = find_root(&mut self.parent, f as u32);
             match self.slot[root] {
                 usize::MAX => {
                     self.slot[root] = components.len();
@@ -636,16 +637,6 @@ impl Scratch {
         }
         components
     }
-}
-
-/// The root of `i`'s set in a union-find forest, halving the path on the way.
-fn find(parent: &mut [u32], mut i: u32) -> usize {
-    while parent[i as usize] != i {
-        let grandparent = parent[parent[i as usize] as usize];
-        parent[i as usize] = grandparent;
-        i = grandparent;
-    }
-    i as usize
 }
 
 /// What a component's 4-neighbours of another label are: counts of pixel sides.

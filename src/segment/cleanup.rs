@@ -15,7 +15,8 @@
 //! [`attach_parts`] then grows the suit into a band around it ([`part_band`]) through pixels of a
 //! part's colour, in pieces shaped like a head, a hand or a shoe ([`PartLimits`]); [`expected_head`]
 //! and [`expected_shoes`] mark where a head is expected above the suit and shoes below it, for a
-//! last look where less was found. The person mask goes to the refinement at full resolution.
+//! last look where less was found. The person mask goes to the refinement at full resolution,
+//! whose result [`fill_suit_holes`] rids of the holes that are mostly the suit's colours.
 
 use crate::mask::bounding_box_of;
 
@@ -32,6 +33,10 @@ pub struct CleanupReport {
     /// Pixels of the cut farther from every marker than the suit's cloth can be
     /// ([`remove_far_from_markers`]).
     pub far_from_markers_pixels: usize,
+    /// Holes of the suit's colours filled in the full-resolution mask ([`fill_suit_holes`]), and
+    /// their pixels (frame pixels, not the cut's).
+    pub suit_holes_filled: usize,
+    pub suit_hole_pixels: usize,
 }
 
 /// 4-connected components of pixels equal to `value`; returns the component id of every pixel
@@ -190,6 +195,122 @@ pub fn fill_holes(
             *label = true;
         }
     }
+}
+
+/// Fills the enclosed background components (4-connected, not reaching the image's border) of at
+/// most `max_hole` pixels of which at least `min_suit_share` are of the suit's colours (`is_suit`,
+/// by index into `labels`): a marker or two that the cut or the refinement left out because the
+/// room has their colour, where the room seen through a gap between the limbs shows the room's
+/// colours. Returns the holes and the pixels filled.
+///
+/// It runs on the full-resolution mask of every frame, so it labels background *runs* (a row's
+/// stretch of background pixels) rather than pixels, joining the runs of neighbouring rows that
+/// overlap; only the pixels of the holes small enough are looked at one by one. Within the box
+/// around the person, a run that reaches the box's edge is the room around the person.
+pub fn fill_suit_holes(
+    labels: &mut [bool],
+    (width, height): (usize, usize),
+    (max_hole, min_suit_share): (usize, f32),
+    is_suit: impl Fn(usize) -> bool,
+    runs: &mut Vec<HoleRun>,
+    parent: &mut Vec<u32>,
+) -> (usize, usize) {
+    let Some((x0, y0, x1, y1)) =
+        bounding_box_of(&labels[..(width * height).min(labels.len())], width)
+    else {
+        return (0, 0);
+    };
+    runs.clear();
+    parent.clear();
+    // Background runs row by row, each joined to the overlapping runs of the row above.
+    let mut above = 0..0;
+    for y in y0..y1 {
+        let row = &labels[y * width..y * width + width];
+        let start = runs.len();
+        let mut x = x0;
+        while x < x1 {
+            if row[x] {
+                x += 1;
+                continue;
+            }
+            let from = x;
+            while x < x1 && !row[x] {
+                x += 1;
+            }
+            let id = runs.len() as u32;
+            runs.push(HoleRun {
+                y,
+                x: from..x,
+                open: from == x0 || x == x1 || y == y0 || y + 1 == y1,
+            });
+            parent.push(id);
+            for k in above.clone() {
+                let r: &HoleRun = &runs[k];
+                if r.x.start < x && from < r.x.end {
+                    let (a, b) = (find_root(parent, id), find_root(parent, k as u32));
+                    parent[a.max(b)] = a.min(b) as u32;
+                }
+            }
+        }
+        above = start..runs.len();
+    }
+    // Per component (its root): pixels and whether it reaches the box's edge.
+    let mut size = vec![0usize; runs.len()];
+    let mut open = vec![false; runs.len()];
+    for (k, run) in runs.iter().enumerate() {
+        let root = find_root(parent, k as u32);
+        parent[k] = root as u32; // every run now points at its root
+        size[root] += run.x.len();
+        open[root] |= run.open;
+    }
+    let candidate = |root: usize| !open[root] && size[root] <= max_hole;
+    let mut suit = vec![0usize; runs.len()];
+    for (k, run) in runs.iter().enumerate() {
+        let root = parent[k] as usize;
+        if candidate(root) {
+            suit[root] += run
+                .x
+                .clone()
+                .filter(|&x| is_suit(run.y * width + x))
+                .count();
+        }
+    }
+    let (mut holes, mut pixels) = (0, 0);
+    for root in 0..runs.len() {
+        if parent[root] as usize == root
+            && candidate(root)
+            && suit[root] as f32 >= min_suit_share * size[root] as f32
+        {
+            holes += 1;
+            pixels += size[root];
+        }
+    }
+    for (k, run) in runs.iter().enumerate() {
+        let root = parent[k] as usize;
+        if candidate(root) && suit[root] as f32 >= min_suit_share * size[root] as f32 {
+            labels[run.y * width + run.x.start..run.y * width + run.x.end].fill(true);
+        }
+    }
+    (holes, pixels)
+}
+
+/// A row's stretch of background pixels within the box around the person, for
+/// [`fill_suit_holes`]; `open` when it touches the box's edge.
+#[derive(Clone, Debug)]
+pub struct HoleRun {
+    y: usize,
+    x: std::ops::Range<usize>,
+    open: bool,
+}
+
+/// The root of `i` in a union-find forest, halving the path on the way.
+pub(crate) fn find_root(parent: &mut [u32], mut i: u32) -> usize {
+    while parent[i as usize] != i {
+        let grand = parent[parent[i as usize] as usize];
+        parent[i as usize] = grand;
+        i = grand;
+    }
+    i as usize
 }
 
 /// A rectangle of grid pixels, columns `x0..x1` and rows `y0..y1`.
@@ -871,6 +992,69 @@ pub fn attach_parts_narrowing(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fill_suit_holes_fills_small_holes_of_the_suits_colours_only() {
+        // A 12 × 6 person with holes ('o': background of the suit's colours, '.': of another
+        // colour). With max_hole 3 and a share of 0.8 three are filled: the L of three pixels
+        // over two rows and the two single pixels at (9, 1) and (10, 2), which touch corner to
+        // corner only. Kept: the hole of the room's colour, the five pixels over rows 3 and 4
+        // (too large) and the pixel at the top right, which is the room around the person.
+        let rows = [
+            "###########o",
+            "#oo#..###o##",
+            "#o########o#",
+            "######oooo##",
+            "#########o##",
+            "############",
+        ];
+        let (w, h) = (12, 6);
+        let grid = |rows: &[&str], f: fn(char) -> bool| -> Vec<bool> {
+            rows.iter().flat_map(|r| r.chars().map(f)).collect()
+        };
+        let mut labels = grid(&rows, |c| c == '#');
+        let suit = grid(&rows, |c| c != '.');
+        let (mut runs, mut parent) = (Vec::new(), Vec::new());
+        let filled = fill_suit_holes(
+            &mut labels,
+            (w, h),
+            (3, 0.8),
+            |i| suit[i],
+            &mut runs,
+            &mut parent,
+        );
+        assert_eq!(filled, (3, 5));
+        let expected = [
+            "###########o",
+            "####..######",
+            "############",
+            "######oooo##",
+            "#########o##",
+            "############",
+        ];
+        assert_eq!(labels, grid(&expected, |c| c == '#'));
+        // Nothing of the suit's colours: nothing filled; nobody: nothing to fill.
+        let mut ring = grid(&["###", "#.#", "###"], |c| c == '#');
+        let kept = fill_suit_holes(
+            &mut ring,
+            (3, 3),
+            (4, 0.8),
+            |_| false,
+            &mut runs,
+            &mut parent,
+        );
+        assert_eq!((kept, ring[4]), ((0, 0), false));
+        let mut nobody = vec![false; 9];
+        let none = fill_suit_holes(
+            &mut nobody,
+            (3, 3),
+            (4, 0.0),
+            |_| true,
+            &mut runs,
+            &mut parent,
+        );
+        assert_eq!((none, nobody), ((0, 0), vec![false; 9]));
+    }
 
     #[test]
     fn add_parts_adds_only_what_is_new_and_counts_it() {

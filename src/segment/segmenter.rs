@@ -53,7 +53,9 @@
 //!    in up to four passes, a marker-coloured outline pixel staying person unless the room beside
 //!    it has a marker's hue too ([`snap`](super::snap), [`SegmenterOptions::snap`]); and decides
 //!    each outline pixel once more by how much of the person's colour beside it the pixel holds
-//!    ([`SegmenterOptions::unmix`]; both counted in the refinement's time).
+//!    ([`SegmenterOptions::unmix`]); last fills the enclosed holes of up to a few markers' area
+//!    that are mostly of the suit's colours, markers the cut lost to a room of their colour
+//!    ([`SegmenterOptions::suit_hole_markers`]; all three counted in the refinement's time).
 //!
 //! A frame with nobody in it gives an empty mask. The mask goes to marker detection and the descriptors;
 //! the box of the suit alone ([`Segmentation::suit_box`]) to the body-size measurement.
@@ -64,8 +66,9 @@ use image::RgbImage;
 
 use super::cleanup::{
     add_parts, attach_parts, attach_parts_narrowing, clean, distance_near, expected_head,
-    expected_shoes, part_bands, region_height, remove_far_from_markers, remove_large_off_cloth,
-    CleanupReport, PartLimits, PixelBox, RegionRule, ATTACH_REACH, PART_REACH,
+    expected_shoes, fill_suit_holes, part_bands, region_height, remove_far_from_markers,
+    remove_large_off_cloth, CleanupReport, HoleRun, PartLimits, PixelBox, RegionRule, ATTACH_REACH,
+    PART_REACH,
 };
 use super::features::{
     colour_index, contrast_bin, downscale, is_near_pattern, is_suit_pattern, temporal_bin,
@@ -91,6 +94,19 @@ pub struct SegmenterOptions {
     /// 2026-12-06; chosen on the nine selection renderings: 0.0002 / 0.0003 / 0.0004 / 0.0006 /
     /// 0.001 / none gave 0.9630 / 0.9635 / 0.9634 / 0.9633 / 0.9630 / 0.9622 mean IoU.
     pub max_hole_fraction: f32,
+    /// After the refinement, enclosed holes of the full-resolution mask up to this many markers'
+    /// areas (at the mask's height taken as [`PERSON_HEIGHT_CM`]) and at least
+    /// [`SUIT_HOLE_MIN_SHARE`] of the suit's colours are filled ([`fill_suit_holes`]): markers
+    /// the cut left out because the room has their colour (cyan markers in front of a teal
+    /// disc), which the cut's hole filling, at a fixed share of the image, misses when two lie
+    /// side by side, and which the refinement can open again. 0: off. Chosen on the nine
+    /// selection renderings (mean IoU; recall and precision of the markers in the segmenter's
+    /// masks): off 0.9523 (0.8966, 0.9876), 1 / 2 / 3 / **4** / 6 / 8 markers 0.9532 / 0.9540 /
+    /// 0.9543 / **0.9543** / 0.9543 / 0.9541 (recall 0.8994 / 0.9016 / 0.9024 / **0.9027** /
+    /// 0.9027 / 0.9022, precision 0.9879–0.9884); at 4, a share of 0.6 / 0.8 / 0.95 gave 0.9543
+    /// / 0.9543 / 0.9541 (recall 0.9029 / 0.9027 / 0.9019). docs/measurements.md, fourth session
+    /// of 2026-12-07.
+    pub suit_hole_markers: f32,
     /// Weight of the upsampled cut against the full-resolution colour in the boundary band (nats).
     pub refine_prior: f32,
     /// Widen the boundary band to the cells next to a label change, not only those across it.
@@ -272,6 +288,10 @@ pub struct SegmenterOptions {
 /// [`SegmenterOptions::part_memory`].
 pub const PART_MEMORY_RADIUS: usize = 2;
 
+/// The share of a hole's pixels that must be of the suit's colours (a marker's or the cloth's)
+/// for [`SegmenterOptions::suit_hole_markers`] to fill it.
+pub const SUIT_HOLE_MIN_SHARE: f32 = 0.8;
+
 /// The height a person is taken to have when the marker size is turned into pixels. The cut
 /// region (without the head, which is attached later) is shorter than the person, so the marker is
 /// taken a little smaller than it is; [`SegmenterOptions::off_cloth_max_markers`] was chosen so.
@@ -287,6 +307,7 @@ impl Default for SegmenterOptions {
         SegmenterOptions {
             min_person_fraction: 0.002,
             max_hole_fraction: 0.0003,
+            suit_hole_markers: 4.0,
             refine_prior: 3.0,
             refine_wide: true,
             snap: Snapping {
@@ -436,6 +457,9 @@ pub struct Segmenter {
     room_seen: Vec<bool>,
     /// Scratch: the grid pixels the room is learned from.
     far: Vec<bool>,
+    /// Scratch of [`fill_suit_holes`]: the mask's background runs and their union-find forest.
+    hole_runs: Vec<HoleRun>,
+    hole_parent: Vec<u32>,
 }
 
 /// Pixel counts over the colour bins, from which the online background and part colours are
@@ -626,6 +650,8 @@ impl Segmenter {
             room: RoomModel::new(),
             room_seen: Vec::new(),
             far: Vec::new(),
+            hole_runs: Vec::new(),
+            hole_parent: Vec::new(),
         }
     }
 
@@ -1155,6 +1181,25 @@ impl Segmenter {
         });
         if let Some(unmixing) = self.options.unmix {
             unmix_outline(frame, &mut mask, unmixing);
+        }
+        if self.options.suit_hole_markers > 0.0 {
+            let height = mask.bounding_box().map_or(0, |(_, y0, _, y1)| y1 - y0) as f32;
+            let side = self.marker_side_share * height;
+            let max_hole = (self.options.suit_hole_markers * side * side) as usize;
+            let (fw, fh) = (frame.width() as usize, frame.height() as usize);
+            let (gate, lut, pixels) = (&self.gate, &self.lut, frame.as_raw());
+            let is_suit = |i: usize| {
+                let c = lut.get([pixels[3 * i], pixels[3 * i + 1], pixels[3 * i + 2]]);
+                gate.is_marker(c) || gate.is_cloth(c)
+            };
+            (report.suit_holes_filled, report.suit_hole_pixels) = fill_suit_holes(
+                mask.pixels_mut(),
+                (fw, fh),
+                (max_hole, SUIT_HOLE_MIN_SHARE),
+                is_suit,
+                &mut self.hole_runs,
+                &mut self.hole_parent,
+            );
         }
         times.refine = ms(started);
 
