@@ -245,7 +245,7 @@ pub fn fill_suit_holes(
             });
             parent.push(id);
             for k in above.clone() {
-                let r: &HoleRun = &runs[k];
+                let r = &runs[k];
                 if r.x.start < x && from < r.x.end {
                     let (a, b) = (find_root(parent, id), find_root(parent, k as u32));
                     parent[a.max(b)] = a.min(b) as u32;
@@ -275,20 +275,16 @@ pub fn fill_suit_holes(
                 .count();
         }
     }
+    let fill: Vec<bool> = (0..runs.len())
+        .map(|root| candidate(root) && suit[root] as f32 >= min_suit_share * size[root] as f32)
+        .collect();
     let (mut holes, mut pixels) = (0, 0);
-    for root in 0..runs.len() {
-        if parent[root] as usize == root
-            && candidate(root)
-            && suit[root] as f32 >= min_suit_share * size[root] as f32
-        {
-            holes += 1;
-            pixels += size[root];
-        }
-    }
     for (k, run) in runs.iter().enumerate() {
         let root = parent[k] as usize;
-        if candidate(root) && suit[root] as f32 >= min_suit_share * size[root] as f32 {
+        if fill[root] {
             labels[run.y * width + run.x.start..run.y * width + run.x.end].fill(true);
+            holes += (root == k) as usize;
+            pixels += run.x.len();
         }
     }
     (holes, pixels)
