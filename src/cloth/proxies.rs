@@ -372,26 +372,29 @@ impl BodyRig {
     }
 
     /// The capsules the renderer draws depth-only to hide the garment behind the body
-    /// (`capsules`, posed by [`BodyRig::pose`], in [`BodyRig::proxies`] order), into `out`. Under
+    /// (`capsules`, posed by [`BodyRig::pose`], in [`BodyRig::proxies`] order). Under
     /// a garment with sleeves each upper arm's capsule starts one radius further down the arm:
     /// a garment cut in the T-pose has too little cloth over a lowered arm's shoulder, whose
     /// round top then stands out of the sleeve and would show the real shoulder through the
     /// garment (the cloth behind it is drawn there instead). Below the ball of the shoulder the
     /// arm keeps its full thickness, so the real arm still hides what is behind it.
-    pub fn occluders(&self, capsules: &[Capsule], sleeves: bool, out: &mut Vec<Capsule>) {
-        out.clear();
-        out.extend(capsules.iter().zip(&self.proxies).map(|(&capsule, proxy)| {
-            let upper_arm = self
-                .body
-                .parts
-                .get(proxy.part)
-                .is_some_and(|part| part.name.contains("upper_arm"));
-            if sleeves && upper_arm {
-                without_shoulder_ball(capsule)
-            } else {
-                capsule
-            }
-        }));
+    pub fn occluders(&self, capsules: &[Capsule], sleeves: bool) -> Vec<Capsule> {
+        capsules
+            .iter()
+            .zip(&self.proxies)
+            .map(|(&capsule, proxy)| {
+                let upper_arm = self
+                    .body
+                    .parts
+                    .get(proxy.part)
+                    .is_some_and(|part| part.name.contains("upper_arm"));
+                if sleeves && upper_arm {
+                    without_shoulder_ball(capsule)
+                } else {
+                    capsule
+                }
+            })
+            .collect()
     }
 
     /// Poses the body for one frame.
@@ -540,10 +543,8 @@ mod tests {
         let (rig, motion) = chidi_walking();
         let mut pose = BodyPose::default();
         rig.pose(motion.frame(5), &mut pose);
-        let mut occluders = Vec::new();
-        rig.occluders(&pose.capsules, false, &mut occluders);
-        assert_eq!(occluders, pose.capsules);
-        rig.occluders(&pose.capsules, true, &mut occluders);
+        assert_eq!(rig.occluders(&pose.capsules, false), pose.capsules);
+        let occluders = rig.occluders(&pose.capsules, true);
         let changed: Vec<&str> = pose
             .capsules
             .iter()

@@ -3153,6 +3153,14 @@ mod tests {
                 .collect::<Vec<_>>()
         };
         let before = in_root(&cloth);
+        // The farthest any vertex moved, seen from the root, since `before`.
+        let moved_from_before = |cloth: &Cloth| {
+            before
+                .iter()
+                .zip(&in_root(cloth))
+                .map(|(p, q)| p.distance(*q))
+                .fold(0.0f32, f32::max)
+        };
         // CMU's root channels are X, Y, Z position then Z, Y, X rotation: channel 4 turns the body
         // about the vertical. 20° in a frame is a fast turn a dancer makes; 90° is a glitch.
         let yaw = |degrees: f32| {
@@ -3166,21 +3174,12 @@ mod tests {
         let info = cloth.step_frame(&rig, &a, &yaw(90.0));
         assert!(info.jumped && !info.redressed);
         // Seen from the root the garment hardly moved: it turned with the body.
-        let after = in_root(&cloth);
-        let moved = before
-            .iter()
-            .zip(&after)
-            .map(|(p, q)| p.distance(*q))
-            .fold(0.0f32, f32::max);
+        let moved = moved_from_before(&cloth);
         assert!(moved < 2.0, "{moved} cm");
         // Without the jump the same turn whips the hem around the legs.
         turned.settings.jump_turn_degrees = 180.0;
         assert!(!turned.step_frame(&rig, &a, &yaw(90.0)).jumped);
-        let whipped = before
-            .iter()
-            .zip(&in_root(&turned))
-            .map(|(p, q)| p.distance(*q))
-            .fold(0.0f32, f32::max);
+        let whipped = moved_from_before(&turned);
         assert!(whipped > 20.0, "{whipped} cm");
     }
 

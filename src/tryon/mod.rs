@@ -333,15 +333,9 @@ impl ClothStage {
             positions: cloth.positions().iter().map(|&p| Vec3::from(p)).collect(),
             triangles: Arc::clone(&simulation.triangles),
             capsules: cloth.pose().capsules.clone(),
-            occluders: {
-                let mut occluders = Vec::new();
-                simulation.rig.occluders(
-                    &cloth.pose().capsules,
-                    simulation.sleeves,
-                    &mut occluders,
-                );
-                occluders
-            },
+            occluders: simulation
+                .rig
+                .occluders(&cloth.pose().capsules, simulation.sleeves),
             quality: Some(cloth.quality()),
             redressed,
             milliseconds: ms(started),
