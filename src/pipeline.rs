@@ -64,6 +64,9 @@ pub struct PoseFrame {
     pub correction: Option<glam::Vec2>,
     /// The image shift the silhouette registration applied to the root after the correction.
     pub registration: Option<glam::Vec2>,
+    /// The frame was part of a root glitch and `frame` was filled in between the poses around it
+    /// ([`crate::pose::smoothing::RootGlitchRepair`], recorded input in the try-on runner).
+    pub root_glitch_filled: bool,
     pub times: PoseTimes,
 }
 
@@ -203,6 +206,7 @@ impl PosePipeline {
                 marker_depth_cm: None,
                 correction: None,
                 registration: None,
+                root_glitch_filled: false,
                 times,
             };
         };
@@ -280,6 +284,7 @@ impl PosePipeline {
             marker_depth_cm,
             correction,
             registration,
+            root_glitch_filled: false,
             times,
         }
     }

@@ -149,9 +149,9 @@ fn run_writes_one_bvh_frame_per_input_frame() {
         let rows = std::fs::read_to_string(out.join("frames.csv")).expect("frames.csv");
         let row = rows.lines().find(|l| l.starts_with("5,")).expect("row 5");
         let bvh_frame = if frames == 12 {
-            ",0.200000,6"
+            ",0.200000,6,0"
         } else {
-            ",0.200000,5"
+            ",0.200000,5,0"
         };
         assert!(row.ends_with(bvh_frame), "{row}");
     }

@@ -91,6 +91,7 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
             pipeline: suitcap::pipeline::PosePipeline::load(&args.suit)?,
             filter: None,
             segmenter: Some(suitcap::pipeline::PosePipeline::load_segmenter(&args.suit)?),
+            root_glitch_window_s: None,
         })
     };
     let mut pose = pose_stage()?;

@@ -54,7 +54,8 @@ pub struct GarmentArgs {
 #[derive(Args, Clone, Debug)]
 pub struct PoseArgs {
     /// Switch off the One-Euro smoothing of the pose, and the filling in of the frames in which the
-    /// whole body turns faster than a person can in the written take.
+    /// whole body turns faster than a person can (in the written take; with `run`, also in the
+    /// poses the garment and the overlays follow).
     #[arg(long)]
     pub no_smoothing: bool,
     /// Switch off the joint limits (SUIT/joint_limits.toml).
@@ -123,7 +124,13 @@ fn render_stage(pipeline: &PosePipeline) -> RenderStage {
     RenderStage::new(RenderSettings::default(), colours)
 }
 
-fn pose_stage(suit_dir: &Path, args: &PoseArgs) -> anyhow::Result<PoseStage> {
+/// The pose stage of `run` (`glitch_window_s`: recorded input, [`GLITCH_WINDOW_S`] unless the
+/// smoothing is off) or of `live` (`None`: a live picture is not held back).
+fn pose_stage(
+    suit_dir: &Path,
+    args: &PoseArgs,
+    glitch_window_s: Option<f64>,
+) -> anyhow::Result<PoseStage> {
     let pipeline = PosePipeline::load(suit_dir)?;
     let limits_path = suit_dir.join(JOINT_LIMITS_FILE);
     let limits = if args.no_limits || !limits_path.exists() {
@@ -144,6 +151,7 @@ fn pose_stage(suit_dir: &Path, args: &PoseArgs) -> anyhow::Result<PoseStage> {
         pipeline,
         filter,
         segmenter,
+        root_glitch_window_s: glitch_window_s.filter(|_| !args.no_smoothing),
     })
 }
 
@@ -261,7 +269,10 @@ pub struct Take {
     held: usize,
     /// Whether [`Take::write`] fills in root glitches.
     repair_glitches: bool,
-    /// The frames the last [`Take::write`] filled in over root glitches.
+    /// BVH frames whose poses came already filled in over a root glitch (the runner's
+    /// [`RootGlitchRepair`](suitcap::pose::smoothing::RootGlitchRepair) on recorded input).
+    filled_before: Vec<usize>,
+    /// The frames filled in over root glitches, before and by the last [`Take::write`].
     glitches: Vec<std::ops::Range<usize>>,
 }
 
@@ -310,6 +321,7 @@ impl Take {
             last: None,
             held: 0,
             repair_glitches: true,
+            filled_before: Vec::new(),
             glitches: Vec::new(),
         })
     }
@@ -410,13 +422,21 @@ impl Take {
         )
     }
 
+    /// Notes that the pose pushed to BVH frame `slot` came filled in over a root glitch, for the
+    /// report ([`Take::glitches_clause`]).
+    pub fn note_glitch_filled(&mut self, slot: u64) {
+        self.filled_before.push(slot as usize);
+    }
+
     /// Writes the take (atomically) and returns its path. The file gets the frames in which the
     /// whole body turned faster than a person can filled in between the frames around them
-    /// ([`repair_root_glitches`], within [`GLITCH_WINDOW_S`]); the take itself keeps them.
+    /// ([`repair_root_glitches`], within [`GLITCH_WINDOW_S`]): a live take's poses come on as
+    /// they were estimated, a `run`'s came filled in already ([`Take::note_glitch_filled`]). The
+    /// take in memory keeps what was pushed.
     pub fn write(&mut self) -> anyhow::Result<PathBuf> {
         let mut values = self.motion.values().to_vec();
         let window = (GLITCH_WINDOW_S * self.fps).round().max(1.0) as usize;
-        self.glitches = if self.repair_glitches {
+        let repaired = if self.repair_glitches {
             repair_root_glitches(
                 &self.motion.skeleton,
                 &mut values,
@@ -426,6 +446,23 @@ impl Take {
         } else {
             Vec::new()
         };
+        let mut filled = vec![false; self.motion.frame_count()];
+        for k in repaired
+            .into_iter()
+            .flatten()
+            .chain(self.filled_before.iter().copied())
+        {
+            if let Some(f) = filled.get_mut(k) {
+                *f = true;
+            }
+        }
+        self.glitches.clear();
+        for (k, _) in filled.iter().enumerate().filter(|(_, &f)| f) {
+            match self.glitches.last_mut() {
+                Some(span) if span.end == k => span.end += 1,
+                _ => self.glitches.push(k..k + 1),
+            }
+        }
         Motion::new(self.motion.skeleton.clone(), 1.0 / self.fps, values)?.write(&self.path)?;
         Ok(self.path.clone())
     }
@@ -467,7 +504,7 @@ impl RunOutputs {
             frames_dir,
             preview: Some(GifPreview::create(&out.join("preview.gif"), settings)?),
             rows: String::from(
-                "frame,person,markers,garment,strain_p95,penetration_cm,segment_ms,describe_ms,regress_ms,cloth_ms,render_ms,composite_ms,time_s,bvh_frame\n",
+                "frame,person,markers,garment,strain_p95,penetration_cm,segment_ms,describe_ms,regress_ms,cloth_ms,render_ms,composite_ms,time_s,bvh_frame,root_glitch\n",
             ),
             next_index: 0,
         })
@@ -477,7 +514,7 @@ impl RunOutputs {
     /// garment column says `skipped` and the rest is empty.
     fn skipped_until(&mut self, index: u64) {
         for k in self.next_index..index {
-            self.rows.push_str(&format!("{k},,,skipped,,,,,,,,,,\n"));
+            self.rows.push_str(&format!("{k},,,skipped,,,,,,,,,,,\n"));
         }
         self.next_index = self.next_index.max(index);
     }
@@ -502,7 +539,7 @@ impl RunOutputs {
                 )
             });
         self.rows.push_str(&format!(
-            "{},{},{},{},{strain},{depth},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.6},{bvh_frame}\n",
+            "{},{},{},{},{strain},{depth},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.6},{bvh_frame},{}\n",
             out.index,
             out.pose.person as u8,
             out.pose.markers.len(),
@@ -513,7 +550,8 @@ impl RunOutputs {
             t.cloth,
             t.render,
             t.composite,
-            out.timestamp_s
+            out.timestamp_s,
+            out.pose.root_glitch_filled as u8
         ));
         Ok(())
     }
@@ -591,7 +629,7 @@ pub fn run(
         anyhow::bail!("{input}: no such frame directory or .y4m file");
     }
     let calibrated = find_camera(input, suit_dir, camera)?;
-    let pose_stage = pose_stage(suit_dir, pose)?;
+    let pose_stage = pose_stage(suit_dir, pose, Some(GLITCH_WINDOW_S))?;
     let mode = if garment.live_cloth {
         SimulationMode::Live
     } else {
@@ -667,7 +705,12 @@ pub fn run(
             }
             let result = take
                 .push(output.index, output.timestamp_s, &output.pose.frame)
-                .and_then(|bvh_frame| outputs.add(&output, bvh_frame));
+                .and_then(|bvh_frame| {
+                    if output.pose.root_glitch_filled {
+                        take.note_glitch_filled(bvh_frame);
+                    }
+                    outputs.add(&output, bvh_frame)
+                });
             bar.inc(1);
             match result {
                 Ok(()) => true,
@@ -1070,7 +1113,7 @@ pub fn live(
             camera.intrinsics.height
         );
     }
-    let pose_stage = pose_stage(suit_dir, pose)?;
+    let pose_stage = pose_stage(suit_dir, pose, None)?;
     let cloth = cloth_stage(
         garment,
         &pose_stage.pipeline.regressor.skeleton.skeleton,
@@ -1453,5 +1496,34 @@ mod tests {
             (z, raw.glitches_clause()),
             (vec![0.0, 2.0, 92.0, 6.0], String::new())
         );
+        // Poses that came filled in already (the runner's repair of recorded input) count with
+        // the frames the write fills in: two glitches, three frames.
+        let mut before = Take::new(
+            &skeleton,
+            30.0,
+            TakeClock::InputFrames,
+            dir.path().join("before.bvh"),
+            Some(0),
+        )
+        .unwrap();
+        for (k, z) in [0.0, 1.0, 2.0, 3.0, 93.0, 5.0].into_iter().enumerate() {
+            let slot = before
+                .push(k as u64, at_rate(k as u64), &[0.0, 0.0, 0.0, z, 0.0, 0.0])
+                .unwrap();
+            if (1..3).contains(&k) {
+                before.note_glitch_filled(slot);
+            }
+        }
+        let path = before.write().unwrap();
+        let z: Vec<f32> = Motion::load(&path)
+            .unwrap()
+            .frames()
+            .map(|f| f[3])
+            .collect();
+        assert_eq!(z, [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]);
+        assert_eq!(before.glitches, vec![1..3, 4..5]);
+        assert!(before
+            .glitches_clause()
+            .contains("3 BVH frames of 2 root glitches"));
     }
 }

@@ -17,6 +17,9 @@
 //! * [`repair_root_glitches`], for a recorded take before it is written: frames in which the
 //!   whole body turns faster than a person can (the regressor flipping the heading for a frame or
 //!   a few) are filled in between the frames around them, which a causal filter cannot do.
+//!   [`RootGlitchRepair`] does the same to a stream by holding the frames of a glitch back until it
+//!   is over: the try-on runner puts recorded input through it on its way to the cloth, so the
+//!   garment is not flung about by a heading the take's file does not have.
 //! * [`PoseFilter`]: both, per BVH channel of one skeleton, each switchable (`Option`) and resettable
 //!   ([`PoseFilter::reset`], e.g. on tracking loss, so the filter does not glide from a stale pose).
 //!   Each frame is clamped, smoothed, and clamped again; it hands the frame back in place.
@@ -57,6 +60,8 @@ pub fn wrap_degrees(a: f64) -> f64 {
 /// (rotations the short way). So a glitch that comes back is taken out, and a turn that stays is
 /// spread over as many frames as a person would need; one that no frame within the window
 /// reaches at that speed is left as it is. Returns the frame ranges filled in.
+///
+/// This is [`RootGlitchRepair`] run over a whole take, with time counted in frames.
 pub fn repair_root_glitches(
     skeleton: &Skeleton,
     values: &mut [f32],
@@ -67,39 +72,153 @@ pub fn repair_root_glitches(
     if n == 0 || max_turn_deg.is_nan() || max_turn_deg <= 0.0 {
         return Vec::new();
     }
-    let frames = values.len() / n;
-    let rotation = skeleton.rotation_channels();
-    let turn = |values: &[f32], i: usize, j: usize| {
-        skeleton.root_turn_degrees(&values[i * n..(i + 1) * n], &values[j * n..(j + 1) * n])
-    };
-    let mut spans = Vec::new();
-    let mut filled = Vec::with_capacity(n);
-    let mut k = 1;
-    while k < frames {
-        let good = k - 1;
-        if turn(values, good, k) <= max_turn_deg {
-            k += 1;
-            continue;
+    let mut repair = RootGlitchRepair::new(skeleton, max_turn_deg, window as f64);
+    let mut released = Vec::new();
+    for (k, frame) in values.chunks_exact(n).enumerate() {
+        released.extend(repair.push(frame.to_vec(), k as f64, k));
+    }
+    released.extend(repair.finish());
+    let mut spans: Vec<std::ops::Range<usize>> = Vec::new();
+    for r in released.into_iter().filter(|r| r.filled) {
+        values[r.item * n..(r.item + 1) * n].copy_from_slice(&r.frame);
+        match spans.last_mut() {
+            Some(span) if span.end == r.item => span.end += 1,
+            _ => spans.push(r.item..r.item + 1),
         }
-        let back = (k + 1..frames.min(k + 1 + window))
-            .find(|&j| turn(values, good, j) <= max_turn_deg * (j - good) as f32);
-        let Some(end) = back else {
-            k += 1;
-            continue;
-        };
-        let (a, b) = (
-            values[good * n..(good + 1) * n].to_vec(),
-            values[end * n..(end + 1) * n].to_vec(),
-        );
-        for m in k..end {
-            let t = (m - good) as f32 / (end - good) as f32;
-            interpolate_frames(&rotation, &a, &b, t, &mut filled);
-            values[m * n..(m + 1) * n].copy_from_slice(&filled);
-        }
-        spans.push(k..end);
-        k = end;
     }
     spans
+}
+
+/// A frame [`RootGlitchRepair`] let go of: its pose (filled in between the frames around a glitch
+/// when `filled`), its time, and what came with it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Released<T> {
+    pub frame: Vec<f32>,
+    pub time: f64,
+    pub item: T,
+    pub filled: bool,
+}
+
+/// [`repair_root_glitches`] as a stream, for the frames of a recording on their way from the pose
+/// stage to the cloth: each pose is let go of as soon as it is known not to be part of a root
+/// glitch, and the frames of a glitch are held until the pose comes back within reach (then they
+/// are filled in between the poses around them) or until `window` has passed since the glitch
+/// began (then its first frame is let go of as it is and the rest judged again). A stream without
+/// glitches passes through without delay; a glitch delays the frames after it by at most the
+/// window. Times are in any unit (seconds for a stream, frame indices for a take) with
+/// `max_turn_deg` the fastest turn per unit and `window` in that unit. Frames come out in the
+/// order they went in, each once.
+#[derive(Clone, Debug)]
+pub struct RootGlitchRepair<T> {
+    skeleton: Skeleton,
+    rotation: Vec<bool>,
+    max_turn_deg: f32,
+    window: f64,
+    /// The last frame let go of, and its time: what a held frame is judged against.
+    good: Option<(Vec<f32>, f64)>,
+    held: std::collections::VecDeque<Released<T>>,
+}
+
+impl<T> RootGlitchRepair<T> {
+    pub fn new(skeleton: &Skeleton, max_turn_deg: f32, window: f64) -> RootGlitchRepair<T> {
+        RootGlitchRepair {
+            skeleton: skeleton.clone(),
+            rotation: skeleton.rotation_channels(),
+            max_turn_deg,
+            window,
+            good: None,
+            held: std::collections::VecDeque::new(),
+        }
+    }
+
+    /// Frames held back, waiting to see whether a glitch comes back.
+    pub fn held(&self) -> usize {
+        self.held.len()
+    }
+
+    /// Takes the pose `frame` at `time` with `item`; gives back the frames that can go on now, in
+    /// order (none while a glitch may be under way).
+    pub fn push(&mut self, frame: Vec<f32>, time: f64, item: T) -> Vec<Released<T>> {
+        self.held.push_back(Released {
+            frame,
+            time,
+            item,
+            filled: false,
+        });
+        self.settle(false)
+    }
+
+    /// Lets go of every frame still held, at the end of the stream (a glitch that has not come
+    /// back by then is left as it is).
+    pub fn finish(&mut self) -> Vec<Released<T>> {
+        self.settle(true)
+    }
+
+    fn reachable(&self, (good, good_time): (&[f32], f64), frame: &Released<T>) -> bool {
+        let turn = self.skeleton.root_turn_degrees(good, &frame.frame);
+        turn <= self.max_turn_deg * (frame.time - good_time) as f32
+    }
+
+    fn release(&mut self, count: usize, out: &mut Vec<Released<T>>) {
+        for r in self.held.drain(..count) {
+            self.good = Some((r.frame.clone(), r.time));
+            out.push(r);
+        }
+    }
+
+    fn settle(&mut self, end: bool) -> Vec<Released<T>> {
+        let mut out = Vec::new();
+        while let Some(first) = self.held.front() {
+            let Some((good, good_time)) = self.good.take() else {
+                self.release(1, &mut out);
+                continue;
+            };
+            let from = (good.as_slice(), good_time);
+            let start = first.time;
+            let back = if self.reachable(from, first) {
+                Some(0)
+            } else {
+                self.held
+                    .iter()
+                    .enumerate()
+                    .skip(1)
+                    .take_while(|(_, h)| h.time - start <= self.window)
+                    .find(|(_, h)| self.reachable(from, h))
+                    .map(|(j, _)| j)
+            };
+            let waiting = !end
+                && self
+                    .held
+                    .back()
+                    .is_some_and(|last| last.time - start <= self.window);
+            match back {
+                Some(j) => {
+                    let span = self.held[j].time - good_time;
+                    let mut filled = Vec::with_capacity(good.len());
+                    for k in 0..j {
+                        let t = ((self.held[k].time - good_time) / span) as f32;
+                        interpolate_frames(
+                            &self.rotation,
+                            &good,
+                            &self.held[j].frame,
+                            t,
+                            &mut filled,
+                        );
+                        let h = &mut self.held[k];
+                        std::mem::swap(&mut h.frame, &mut filled);
+                        h.filled = true;
+                    }
+                    self.release(j + 1, &mut out);
+                }
+                None if waiting => {
+                    self.good = Some((good, good_time));
+                    break;
+                }
+                None => self.release(1, &mut out),
+            }
+        }
+        out
+    }
 }
 
 /// Parameters of one One-Euro filter (cutoffs in Hz; `beta` in 1 / (signal unit)).
@@ -674,6 +793,120 @@ mod tests {
         // The short way round: 170° to −170° is a 20° turn.
         let mut across = turning(&[150.0, 170.0, -170.0]);
         assert!(repair_root_glitches(&arm, &mut across, 35.0, 15).is_empty());
+    }
+
+    /// The yaw of each released frame and whether it was filled in, with the items' order.
+    fn yaws(released: &[Released<usize>]) -> Vec<(usize, f32, bool)> {
+        released
+            .iter()
+            .map(|r| (r.item, r.frame[4], r.filled))
+            .collect()
+    }
+
+    #[test]
+    fn a_stream_is_held_back_only_while_a_glitch_may_be_under_way() {
+        let arm = two_joint_arm();
+        let frames = turning(&[0.0, 10.0, 90.0, 15.0, 20.0]);
+        // 30 frames/s, the fastest turn 1050°/s (35° a frame), half a second's window.
+        let mut repair = RootGlitchRepair::new(&arm, 1050.0, 0.5);
+        let mut out = Vec::new();
+        for (k, frame) in frames.chunks(9).enumerate() {
+            let released = repair.push(frame.to_vec(), k as f64 / 30.0, k);
+            out.push(yaws(&released));
+        }
+        assert_eq!(out[0], [(0, 0.0, false)]);
+        assert_eq!(out[1], [(1, 10.0, false)]);
+        // Frame 2 turns 80° in a frame: held until frame 3 comes back within reach.
+        assert!(out[2].is_empty() && out.len() == 5);
+        assert_eq!(out[3].len(), 2);
+        assert_eq!((out[3][0].0, out[3][0].2), (2, true));
+        assert!((out[3][0].1 - 12.5).abs() < 1e-4, "{:?}", out[3]);
+        assert_eq!(out[3][1], (3, 15.0, false));
+        assert_eq!(out[4], [(4, 20.0, false)]);
+        assert!(repair.finish().is_empty() && repair.held() == 0);
+    }
+
+    #[test]
+    fn a_turn_that_no_frame_within_the_window_undoes_goes_on_as_it_is() {
+        let arm = two_joint_arm();
+        // Window of one frame: 90° cannot be reached from 0° at 35° a frame within it.
+        let mut repair = RootGlitchRepair::new(&arm, 35.0, 1.0);
+        let frames = turning(&[0.0, 90.0, 90.0, 90.0]);
+        let mut pushed = frames.chunks(9).enumerate();
+        let mut push = |repair: &mut RootGlitchRepair<usize>| {
+            let (k, frame) = pushed.next().expect("a frame");
+            yaws(&repair.push(frame.to_vec(), k as f64, k))
+        };
+        assert_eq!(push(&mut repair), [(0, 0.0, false)]);
+        assert!(push(&mut repair).is_empty());
+        assert!(push(&mut repair).is_empty());
+        assert_eq!(
+            push(&mut repair),
+            [(1, 90.0, false), (2, 90.0, false), (3, 90.0, false)]
+        );
+        // At the end of a stream whatever is held goes as it is.
+        let mut ended = RootGlitchRepair::new(&arm, 35.0, 15.0);
+        assert_eq!(ended.push(frames[..9].to_vec(), 0.0, 0).len(), 1);
+        assert!(ended.push(frames[9..18].to_vec(), 1.0, 1).is_empty());
+        assert_eq!(yaws(&ended.finish()), [(1, 90.0, false)]);
+    }
+
+    /// The whole-take repair as it was written before the stream existed, frame index by frame
+    /// index, kept as the stream's reference.
+    fn repaired_frame_by_frame(skeleton: &Skeleton, values: &mut [f32], max: f32, window: usize) {
+        let n = skeleton.channel_count();
+        let frames = values.len() / n;
+        let rotation = skeleton.rotation_channels();
+        let turn = |values: &[f32], i: usize, j: usize| {
+            skeleton.root_turn_degrees(&values[i * n..(i + 1) * n], &values[j * n..(j + 1) * n])
+        };
+        let mut filled = Vec::new();
+        let mut k = 1;
+        while k < frames {
+            let good = k - 1;
+            if turn(values, good, k) <= max {
+                k += 1;
+                continue;
+            }
+            let back = (k + 1..frames.min(k + 1 + window))
+                .find(|&j| turn(values, good, j) <= max * (j - good) as f32);
+            let Some(end) = back else {
+                k += 1;
+                continue;
+            };
+            let (a, b) = (
+                values[good * n..(good + 1) * n].to_vec(),
+                values[end * n..(end + 1) * n].to_vec(),
+            );
+            for m in k..end {
+                let t = (m - good) as f32 / (end - good) as f32;
+                interpolate_frames(&rotation, &a, &b, t, &mut filled);
+                values[m * n..(m + 1) * n].copy_from_slice(&filled);
+            }
+            k = end;
+        }
+    }
+
+    proptest::proptest! {
+        /// Streamed, every frame comes out once, in order, as the frame-by-frame repair of the
+        /// whole take has it.
+        #[test]
+        fn streaming_matches_the_whole_take(yaw in proptest::collection::vec(-180.0f32..180.0, 1..40)) {
+            let arm = two_joint_arm();
+            let frames = turning(&yaw);
+            let mut whole = frames.clone();
+            repaired_frame_by_frame(&arm, &mut whole, 35.0, 3);
+            let mut repair = RootGlitchRepair::new(&arm, 35.0, 3.0);
+            let mut streamed = Vec::new();
+            for (k, frame) in frames.chunks(9).enumerate() {
+                streamed.extend(repair.push(frame.to_vec(), k as f64, k));
+            }
+            streamed.extend(repair.finish());
+            let order: Vec<usize> = streamed.iter().map(|r| r.item).collect();
+            proptest::prop_assert_eq!(order, (0..yaw.len()).collect::<Vec<_>>());
+            let values: Vec<f32> = streamed.into_iter().flat_map(|r| r.frame).collect();
+            proptest::prop_assert_eq!(values, whole);
+        }
     }
 
     #[test]

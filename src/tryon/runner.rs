@@ -23,9 +23,10 @@ use image::RgbImage;
 use crate::body_size::Silhouette;
 use crate::camera::Camera;
 use crate::pipeline::{PoseFrame, PosePipeline};
-use crate::pose::smoothing::PoseFilter;
+use crate::pose::smoothing::{PoseFilter, Released, RootGlitchRepair};
 use crate::queue::{Full, StageQueue};
 use crate::segment::{Segmentation, Segmenter};
+use crate::skeleton::MAX_ROOT_TURN_DEG_PER_S;
 use crate::source::{FrameSource, SourceError};
 
 use super::{
@@ -133,6 +134,12 @@ pub struct PoseStage {
     pub pipeline: PosePipeline,
     pub filter: Option<PoseFilter>,
     pub segmenter: Option<Segmenter>,
+    /// With `Some(window)` (seconds), the poses go on through a [`RootGlitchRepair`] (the root
+    /// turning faster than [`MAX_ROOT_TURN_DEG_PER_S`], coming back within the window): the frames
+    /// of a glitch are held back until it is over and go on filled in between the poses around
+    /// it, to the cloth, the overlays and the sink alike. It delays the frames after a glitch by up
+    /// to the window, so it is for recorded input; `None` passes every pose on as it comes.
+    pub root_glitch_window_s: Option<f64>,
 }
 
 impl PoseStage {
@@ -247,6 +254,9 @@ pub fn run(
         }
         {
             let (input, output) = (segmented.clone(), posed.clone());
+            let mut repair = pose_stage
+                .root_glitch_window_s
+                .map(|window| RootGlitchRepair::new(&skeleton, MAX_ROOT_TURN_DEG_PER_S, window));
             scope.spawn(move || {
                 while let Some(Segmented {
                     captured,
@@ -260,9 +270,20 @@ pub fn run(
                     if segmentation.is_some() {
                         pose.times.segment = segment_ms;
                     }
-                    if output.push(Posed { captured, pose }).is_err() {
+                    let posed = Posed { captured, pose };
+                    let sent = match repair.as_mut() {
+                        Some(repair) => {
+                            let frame = posed.pose.frame.clone();
+                            pass_on(&output, repair.push(frame, time, posed))
+                        }
+                        None => output.push(posed).is_ok(),
+                    };
+                    if !sent {
                         break;
                     }
+                }
+                if let Some(repair) = repair.as_mut() {
+                    pass_on(&output, repair.finish());
                 }
                 input.close();
                 output.close();
@@ -392,6 +413,19 @@ pub fn run(
     summary.stopped_by_user = controls.stopped();
     summary.seconds = started.elapsed().as_secs_f64();
     summary
+}
+
+/// Passes the frames a [`RootGlitchRepair`] let go of on to the next stage, each with its pose
+/// filled in where the repair did; `false` once the next stage is gone.
+fn pass_on(output: &StageQueue<Posed>, released: Vec<Released<Posed>>) -> bool {
+    released.into_iter().all(|r| {
+        let mut posed = r.item;
+        if r.filled {
+            posed.pose.frame = r.frame;
+            posed.pose.root_glitch_filled = true;
+        }
+        output.push(posed).is_ok()
+    })
 }
 
 /// How the capture thread ended.
