@@ -13,7 +13,10 @@
 //! clip's fastest hands and feet are printed, and the quality runs count the vertices that tunnel
 //! through a capsule in any substep, `Cloth::check_tunnelling`; the frames/s in those lines include
 //! the count's cost, criterion's throughput does not). `CLOTH_BENCH_SPEED_ONLY=1` skips the
-//! quality figures (for timing runs that alternate builds).
+//! quality figures (for timing runs that alternate builds). The T-shirt at 4,000 vertices is also
+//! timed as `live` runs it on estimated poses (`…/estimated-inertia`: the cloth carried with its
+//! bone every substep, [`SolverSettings::inertia`]); its quality figures are not printed (the
+//! targets are for true motion, simulated at full inertia).
 
 use std::path::Path;
 
@@ -77,31 +80,49 @@ fn bench(c: &mut Criterion) {
             let label = format!("quality mode ({} substeps, 1 cm edges)", quality.substeps);
             report(label, &mesh, &quality);
         }
-        for kind in [GarmentKind::TShirt, GarmentKind::Dress] {
-            for target in [2000usize, 4000] {
-                let (mesh, edge) =
-                    GarmentMesh::with_vertex_count(kind, &rig, target, 2.5).expect("garment");
-                report(format!("{edge:.2} cm edges"), &mesh, &settings);
-                let mut dressed = Cloth::new(&mesh, &material, &settings, &rig).expect("cloth");
-                dressed.dress(&rig, frames.frame(0));
-                let steps = frames.frame_count() - 1;
-                group.throughput(Throughput::Elements(steps as u64));
-                group.bench_function(
-                    format!("{clip_name}/{}/{}v", kind.name(), mesh.positions.len()),
-                    |b| {
-                        b.iter_batched(
-                            || dressed.clone(),
-                            |mut cloth| {
-                                for k in 1..frames.frame_count() {
-                                    cloth.step_frame(&rig, frames.frame(k - 1), frames.frame(k));
-                                }
-                                cloth
-                            },
-                            BatchSize::LargeInput,
-                        )
-                    },
-                );
+        // The T-shirt at 4,000 vertices also as `live` runs it on estimated poses
+        // (`suitcap::tryon::ESTIMATED_POSE_INERTIA`): what carrying the cloth with its bone every
+        // substep costs.
+        let live_app = SolverSettings {
+            inertia: suitcap::tryon::ESTIMATED_POSE_INERTIA,
+            ..settings.clone()
+        };
+        let cases = [
+            (GarmentKind::TShirt, 2000usize, &settings, ""),
+            (GarmentKind::TShirt, 4000, &settings, ""),
+            (GarmentKind::TShirt, 4000, &live_app, "/estimated-inertia"),
+            (GarmentKind::Dress, 2000, &settings, ""),
+            (GarmentKind::Dress, 4000, &settings, ""),
+        ];
+        for (kind, target, settings, suffix) in cases {
+            let (mesh, edge) =
+                GarmentMesh::with_vertex_count(kind, &rig, target, 2.5).expect("garment");
+            if suffix.is_empty() {
+                report(format!("{edge:.2} cm edges"), &mesh, settings);
             }
+            let mut dressed = Cloth::new(&mesh, &material, settings, &rig).expect("cloth");
+            dressed.dress(&rig, frames.frame(0));
+            let steps = frames.frame_count() - 1;
+            group.throughput(Throughput::Elements(steps as u64));
+            group.bench_function(
+                format!(
+                    "{clip_name}/{}/{}v{suffix}",
+                    kind.name(),
+                    mesh.positions.len()
+                ),
+                |b| {
+                    b.iter_batched(
+                        || dressed.clone(),
+                        |mut cloth| {
+                            for k in 1..frames.frame_count() {
+                                cloth.step_frame(&rig, frames.frame(k - 1), frames.frame(k));
+                            }
+                            cloth
+                        },
+                        BatchSize::LargeInput,
+                    )
+                },
+            );
         }
     }
     group.finish();

@@ -111,6 +111,8 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let cloth_options = || {
         let mut o = ClothOptions::new(GarmentChoice::Procedural(kind), SimulationMode::Live);
         o.edge_cm = Some(edge);
+        // As `live` runs it on the poses it estimates.
+        o.inertia = suitcap::tryon::ESTIMATED_POSE_INERTIA;
         // The template's size, so the garment has the asked vertex count (timing, not fit).
         o.known_size = Some(suitcap::body_size::BodySize::TEMPLATE);
         o

@@ -30,6 +30,7 @@ use suitcap::tryon::runner::{
 };
 use suitcap::tryon::{
     ClothOptions, ClothStage, ClothStatus, GarmentChoice, Overlays, RenderStage, SimulationMode,
+    ESTIMATED_POSE_INERTIA,
 };
 
 /// Options shared by the commands that put a garment on.
@@ -107,6 +108,7 @@ fn cloth_stage(
     }
     let mut options = ClothOptions::new(garment_choice(&args.garment)?, mode);
     options.material = material(&args.material)?;
+    options.inertia = ESTIMATED_POSE_INERTIA;
     Ok(Some(ClothStage::new(template, options)?))
 }
 

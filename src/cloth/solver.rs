@@ -218,6 +218,18 @@
 //! `blend_frames`, then `settle_frames` at that pose. [`Cloth::reset`] does that again (lost
 //! tracking).
 //!
+//! **Inertia.** With [`SolverSettings::inertia`] below full, every substep first carries the free
+//! vertices rigidly along the rest of the garment's own bone's move (the bone most rigid anchors
+//! hang on: the chest for a T-shirt or a dress, the hip for a skirt) — `1 − linear` of its
+//! joint's travel and `1 − angular` of its turn about that joint — and turns their velocities
+//! alike, so that only the given shares of the body's travelling and turning are felt as inertia
+//! (the linear and angular inertia of game cloth solvers such as NvCloth). The vertices'
+//! velocities are then relative to the carry, and so is the surface motion friction compares them
+//! with. The limbs' motion relative to that bone is felt in full. For true motion (`drape`, the
+//! benchmark) the inertia is full, the physics as it is; the try-on of estimated poses feels less
+//! ([`crate::tryon::ESTIMATED_POSE_INERTIA`]), since an estimated body's heading and depth shake
+//! from frame to frame in ways a real one's do not.
+//!
 //! **Determinism.** Everything runs on one thread in a fixed order, with no hash maps and no parallel
 //! reductions: the same inputs give bit-identical positions.
 //!
@@ -352,6 +364,30 @@ pub struct SolverSettings {
     /// Time constant with which a sleeve's end that slid further is drawn back, s: each substep
     /// of length `h` moves it `1 − exp(−h/τ)` of the way (as `loose_anchor_seconds`).
     pub cuff_hold_seconds: f32,
+    /// How much of the garment's bone's own travelling and turning the cloth feels (see
+    /// *Inertia* in the module documentation): [`Inertia::FULL`] simulates in the world as it is.
+    pub inertia: Inertia,
+}
+
+/// Shares, each in [0, 1], of a garment's bone's travel (`linear`) and turn about its joint
+/// (`angular`) that the cloth feels as inertia; the rest carries it rigidly
+/// ([`SolverSettings::inertia`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Inertia {
+    pub linear: f32,
+    pub angular: f32,
+}
+
+impl Inertia {
+    /// All of it: the cloth simulated in the world.
+    pub const FULL: Inertia = Inertia {
+        linear: 1.0,
+        angular: 1.0,
+    };
+
+    fn is_full(self) -> bool {
+        self.linear >= 1.0 && self.angular >= 1.0
+    }
 }
 
 impl SolverSettings {
@@ -412,6 +448,7 @@ impl SolverSettings {
             strain_limit: 0.09,
             cuff_slide_cm: 3.0,
             cuff_hold_seconds: 0.05,
+            inertia: Inertia::FULL,
         }
     }
 
@@ -581,6 +618,11 @@ pub struct Cloth {
     mass: Vec<f32>,
     inv_mass: Vec<f32>,
     anchors: Vec<Anchor>,
+    /// The bone whose motion carries the cloth below full [`SolverSettings::inertia`]: the one
+    /// most rigid anchors are bound to.
+    carry_bone: usize,
+    /// This substep's carry ([`Cloth::carry_delta`]), `None` at full root inertia.
+    carry: Option<Affine3A>,
     cuffs: Vec<CuffLimit>,
     /// Capsule indices of the cuffs' bones.
     cuff_capsules: Vec<u16>,
@@ -725,6 +767,18 @@ impl Cloth {
             }
         };
         check(
+            "inertia.linear",
+            settings.inertia.linear,
+            (0.0..=1.0).contains(&settings.inertia.linear),
+            "between 0 and 1",
+        )?;
+        check(
+            "inertia.angular",
+            settings.inertia.angular,
+            (0.0..=1.0).contains(&settings.inertia.angular),
+            "between 0 and 1",
+        )?;
+        check(
             "fps",
             settings.fps,
             settings.fps > 0.0 && settings.fps.is_finite(),
@@ -810,6 +864,8 @@ impl Cloth {
             mass,
             inv_mass,
             anchors: garment.anchors.clone(),
+            carry_bone: carry_bone(&garment.anchors),
+            carry: None,
             cuffs,
             cuff_capsules,
             edges: Vec::new(),
@@ -1089,6 +1145,24 @@ impl Cloth {
         self.update_normals();
     }
 
+    /// The rigid move that carries the free vertices below full [`SolverSettings::inertia`] over
+    /// this substep: the carrying bone from `pose_before`'s place to `1 − linear` of the way to
+    /// `pose`'s (its joint's position, by lerp) and `1 − angular` of its turn (by slerp).
+    fn carry_delta(&self, inertia: Inertia) -> Option<Affine3A> {
+        let bone = self.carry_bone;
+        let (from, to) = (
+            self.pose_before.bones.get(bone)?,
+            self.pose.bones.get(bone)?,
+        );
+        let (_, q0, t0) = from.to_scale_rotation_translation();
+        let (_, q1, t1) = to.to_scale_rotation_translation();
+        let part = Affine3A::from_rotation_translation(
+            q0.slerp(q1, 1.0 - inertia.angular),
+            t0.lerp(t1, 1.0 - inertia.linear),
+        );
+        Some(part * from.inverse())
+    }
+
     /// Moves the cloth rigidly by `to · from⁻¹` and stops it: a teleport with the body's root.
     pub fn teleport(&mut self, from: &Affine3A, to: &Affine3A) {
         let delta = *to * from.inverse();
@@ -1261,6 +1335,11 @@ impl Cloth {
             if self.dressing {
                 self.update_normals();
             }
+            self.carry = if self.dressing || self.settings.inertia.is_full() {
+                None
+            } else {
+                self.carry_delta(self.settings.inertia)
+            };
             self.substep(h, rounds);
         }
         // Once a frame, not every substep (9 % of the solver's time): the normals serve the air
@@ -1412,6 +1491,9 @@ impl Cloth {
         let inv_h = 1.0 / h;
         let max_speed = self.settings.max_speed;
         let mu = self.material.friction;
+        // The vertices' velocities are relative to the carry (it moved them without speed), so
+        // the surface's motion is taken relative to it too.
+        let uncarry = self.carry.map(|c| c.inverse());
         for (k, ((v, x), p)) in self.v.iter_mut().zip(&self.x).zip(&self.prev).enumerate() {
             let mut velocity = (*x - *p) * inv_h;
             // Contact: the push out of a capsule is a position fix, not a bounce, so the velocity
@@ -1421,7 +1503,8 @@ impl Cloth {
             // velocity. Friction at the velocity level leaves the constraint projections alone.
             let n = self.contact_normal[k];
             if n != Vec3A::ZERO {
-                let surface = self.contact_motion[k] * inv_h;
+                let carried = uncarry.map_or(Vec3A::ZERO, |u| *p - u.transform_point3a(*p));
+                let surface = (self.contact_motion[k] - carried) * inv_h;
                 let relative = velocity - surface;
                 let along = relative.dot(n);
                 let tangential = relative - n * along;
@@ -1474,7 +1557,13 @@ impl Cloth {
         let kn = self.material.drag_normal / self.material.density_g_per_cm2 * h;
         let kt = (self.material.drag_tangential / self.material.density_g_per_cm2 * h).min(1.0);
         let keep = (1.0 - self.material.damping * h).clamp(0.0, 1.0);
+        let carry = self.carry;
         for v in 0..self.x.len() {
+            if let (Some(carry), true) = (carry, self.inv_mass[v] > 0.0) {
+                // Carried with the garment's bone: moved and turned alike, no speed gained.
+                self.x[v] = carry.transform_point3a(self.x[v]);
+                self.v[v] = carry.matrix3 * self.v[v];
+            }
             self.prev[v] = self.x[v];
             if self.inv_mass[v] == 0.0 {
                 continue;
@@ -2328,6 +2417,24 @@ pub fn evaluate(
     run_motion(&rig, &mut cloth, &resampled, |_, _, _| {})
 }
 
+/// The bone most of `anchors` are rigidly bound to (the loose ones if none is rigid; the root if
+/// there are none): the garment's own frame, which carries it below full root inertia.
+fn carry_bone(anchors: &[Anchor]) -> usize {
+    let rigid = anchors.iter().any(|a| a.slack_cm <= 0.0);
+    let mut counts: Vec<usize> = Vec::new();
+    for a in anchors.iter().filter(|a| !rigid || a.slack_cm <= 0.0) {
+        if counts.len() <= a.bone {
+            counts.resize(a.bone + 1, 0);
+        }
+        counts[a.bone] += 1;
+    }
+    counts
+        .iter()
+        .enumerate()
+        .max_by_key(|&(bone, &count)| (count, std::cmp::Reverse(bone)))
+        .map_or(0, |(bone, _)| bone)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -3142,6 +3249,112 @@ mod tests {
     }
 
     #[test]
+    fn below_full_inertia_the_garment_is_carried_partly_with_its_bone() {
+        let (rig, cloth, a) = skirt_dressed_on_the_walk();
+        // The skirt hangs on the hip, the root.
+        assert_eq!(cloth.carry_bone, 0);
+        let in_root = |cloth: &Cloth| {
+            let root = cloth.pose().bones[0].inverse();
+            cloth
+                .positions()
+                .iter()
+                .map(|&p| root.transform_point3a(p))
+                .collect::<Vec<_>>()
+        };
+        let before = in_root(&cloth);
+        // The farthest any vertex moved, seen from the root, over one frame to `next`.
+        let moved = |next: &[f32], inertia: Inertia| {
+            let mut c = cloth.clone();
+            c.settings.inertia = inertia;
+            assert!(!c.step_frame(&rig, &a, next).jumped);
+            before
+                .iter()
+                .zip(&in_root(&c))
+                .map(|(p, q)| p.distance(*q))
+                .fold(0.0f32, f32::max)
+        };
+        // The skirt still settles a little on a body that does not move.
+        let settling = moved(&a, Inertia::FULL);
+        let angular = |angular| Inertia {
+            linear: 1.0,
+            angular,
+        };
+        let linear = |linear| Inertia {
+            linear,
+            angular: 1.0,
+        };
+        // 30° in a frame about the vertical (channel 4): fast, but not a jump. In the world the
+        // hem lags behind the hips (19.1 cm); carried by half the turn it lags about half as far
+        // (9.4 cm); carried by all of it, it moves on the body as on a body that stood still
+        // (2.7 cm). The linear share does not matter to a turn about the carrying joint.
+        let mut turned = a.clone();
+        turned[4] += 30.0;
+        let (full, half, none) = (
+            moved(&turned, Inertia::FULL),
+            moved(&turned, angular(0.5)),
+            moved(&turned, angular(0.0)),
+        );
+        assert!(full > 10.0, "{full} cm");
+        assert!(
+            half < 0.6 * full && half > 0.4 * full,
+            "{half} of {full} cm"
+        );
+        assert!(none < settling + 0.2, "{none} cm, {settling} cm settling");
+        let travel_free = moved(&turned, linear(0.0));
+        assert!(
+            (travel_free - full).abs() < 0.01,
+            "{travel_free} against {full} cm"
+        );
+        // 30 cm sideways in a frame (Xposition, channel 0; a jump is 50): the same with travel.
+        let mut moved_aside = a.clone();
+        moved_aside[0] += 30.0;
+        let (full, half, none) = (
+            moved(&moved_aside, Inertia::FULL),
+            moved(&moved_aside, linear(0.5)),
+            moved(&moved_aside, linear(0.0)),
+        );
+        assert!(full > 10.0, "{full} cm");
+        assert!(
+            half < 0.6 * full && half > 0.4 * full,
+            "{half} of {full} cm"
+        );
+        assert!(none < settling + 0.2, "{none} cm, {settling} cm settling");
+    }
+
+    #[test]
+    fn a_garment_is_carried_by_the_bone_most_of_its_rigid_anchors_hang_on() {
+        let anchor = |bone: usize, slack_cm: f32| Anchor {
+            vertex: 0,
+            bone,
+            local: Vec3::ZERO,
+            slack_cm,
+        };
+        // Two rigid on bone 3, three loose on bone 5: bone 3.
+        let mixed = [
+            anchor(3, 0.0),
+            anchor(5, 2.0),
+            anchor(3, 0.0),
+            anchor(5, 2.0),
+            anchor(5, 2.0),
+        ];
+        assert_eq!(carry_bone(&mixed), 3);
+        // Only loose ones: theirs; a tie: the lower bone; none: the root.
+        assert_eq!(
+            carry_bone(&[anchor(5, 2.0), anchor(2, 1.0), anchor(5, 1.0)]),
+            5
+        );
+        assert_eq!(carry_bone(&[anchor(4, 0.0), anchor(2, 0.0)]), 2);
+        assert_eq!(carry_bone(&[]), 0);
+        // The T-shirt hangs on the chest.
+        let (rig, _) = walk();
+        let mesh = GarmentMesh::generate(GarmentKind::TShirt, &rig, &GarmentParams::live())
+            .expect("tshirt");
+        let cloth =
+            Cloth::new(&mesh, &Material::medium(), &SolverSettings::live(), &rig).expect("cloth");
+        assert_eq!(rig.skeleton().joints()[cloth.carry_bone].name, "chest");
+    }
+
+    #[test]
     fn a_root_turn_too_fast_for_a_person_turns_the_cloth_with_the_body() {
         let (rig, mut cloth, a) = skirt_dressed_on_the_walk();
         let in_root = |cloth: &Cloth| {
@@ -3223,6 +3436,22 @@ mod tests {
                 Cloth::new(&mesh, &Material::medium(), &settings, &rig),
                 Err(ClothError::Setting {
                     name: "strain_limit",
+                    ..
+                })
+            ));
+        }
+        for linear in [-0.5, 1.5, f32::NAN] {
+            let settings = SolverSettings {
+                inertia: Inertia {
+                    linear,
+                    angular: 0.5,
+                },
+                ..SolverSettings::live()
+            };
+            assert!(matches!(
+                Cloth::new(&mesh, &Material::medium(), &settings, &rig),
+                Err(ClothError::Setting {
+                    name: "inertia.linear",
                     ..
                 })
             ));
