@@ -1462,22 +1462,31 @@ mod tests {
         // The whole body spun 90° for one frame (the hip's Z rotation is channel 3): the file
         // gets that frame filled in between its neighbours, the take keeps what was estimated.
         let dir = tempfile::tempdir().unwrap();
-        let mut spun = Take::new(
-            &skeleton,
-            30.0,
-            TakeClock::InputFrames,
-            dir.path().join("take.bvh"),
-            Some(0),
-        )
-        .unwrap();
+        let recording_to = |name: &str| {
+            Take::new(
+                &skeleton,
+                30.0,
+                TakeClock::InputFrames,
+                dir.path().join(name),
+                Some(0),
+            )
+            .unwrap()
+        };
+        // The hip's Z rotation (channel 3) of every frame of a written take.
+        let written_z = |path: PathBuf| -> Vec<f32> {
+            Motion::load(&path)
+                .unwrap()
+                .frames()
+                .map(|f| f[3])
+                .collect()
+        };
+        let mut spun = recording_to("take.bvh");
         for (k, z) in [0.0, 2.0, 92.0, 6.0].into_iter().enumerate() {
             spun.push(k as u64, at_rate(k as u64), &[0.0, 0.0, 0.0, z, 0.0, 0.0])
                 .unwrap();
         }
         assert_eq!(spun.glitches_clause(), "");
-        let path = spun.write().unwrap();
-        let written = Motion::load(&path).unwrap();
-        let z: Vec<f32> = written.frames().map(|f| f[3]).collect();
+        let z = written_z(spun.write().unwrap());
         assert_eq!(z, [0.0, 2.0, 4.0, 6.0]);
         assert_eq!(spun.motion.frame(2)[3], 92.0);
         assert!(
@@ -1488,26 +1497,14 @@ mod tests {
         );
         // Switched off (--no-smoothing), the file keeps the spin.
         let mut raw = spun.repairing_glitches(false);
-        let path = raw.write().unwrap();
-        let z: Vec<f32> = Motion::load(&path)
-            .unwrap()
-            .frames()
-            .map(|f| f[3])
-            .collect();
+        let z = written_z(raw.write().unwrap());
         assert_eq!(
             (z, raw.glitches_clause()),
             (vec![0.0, 2.0, 92.0, 6.0], String::new())
         );
         // Poses that came filled in already (the runner's repair of recorded input) count with
         // the frames the write fills in: two glitches, three frames.
-        let mut before = Take::new(
-            &skeleton,
-            30.0,
-            TakeClock::InputFrames,
-            dir.path().join("before.bvh"),
-            Some(0),
-        )
-        .unwrap();
+        let mut before = recording_to("before.bvh");
         for (k, z) in [0.0, 1.0, 2.0, 3.0, 93.0, 5.0].into_iter().enumerate() {
             let slot = before
                 .push(k as u64, at_rate(k as u64), &[0.0, 0.0, 0.0, z, 0.0, 0.0])
@@ -1516,12 +1513,7 @@ mod tests {
                 before.note_glitch_filled(slot);
             }
         }
-        let path = before.write().unwrap();
-        let z: Vec<f32> = Motion::load(&path)
-            .unwrap()
-            .frames()
-            .map(|f| f[3])
-            .collect();
+        let z = written_z(before.write().unwrap());
         assert_eq!(z, [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]);
         assert_eq!(before.glitches, vec![1..3, 4..5]);
         assert!(before

@@ -3248,20 +3248,22 @@ mod tests {
         assert_eq!(cloth.advance(&rig, &t_pose, &t_pose, f32::NAN).substeps, 1);
     }
 
+    /// The cloth's positions seen from its body's root.
+    fn in_root_frame(cloth: &Cloth) -> Vec<Vec3A> {
+        let root = cloth.pose().bones[0].inverse();
+        cloth
+            .positions()
+            .iter()
+            .map(|&p| root.transform_point3a(p))
+            .collect()
+    }
+
     #[test]
     fn below_full_inertia_the_garment_is_carried_partly_with_its_bone() {
         let (rig, cloth, a) = skirt_dressed_on_the_walk();
         // The skirt hangs on the hip, the root.
         assert_eq!(cloth.carry_bone, 0);
-        let in_root = |cloth: &Cloth| {
-            let root = cloth.pose().bones[0].inverse();
-            cloth
-                .positions()
-                .iter()
-                .map(|&p| root.transform_point3a(p))
-                .collect::<Vec<_>>()
-        };
-        let before = in_root(&cloth);
+        let before = in_root_frame(&cloth);
         // The farthest any vertex moved, seen from the root, over one frame to `next`.
         let moved = |next: &[f32], inertia: Inertia| {
             let mut c = cloth.clone();
@@ -3269,7 +3271,7 @@ mod tests {
             assert!(!c.step_frame(&rig, &a, next).jumped);
             before
                 .iter()
-                .zip(&in_root(&c))
+                .zip(&in_root_frame(&c))
                 .map(|(p, q)| p.distance(*q))
                 .fold(0.0f32, f32::max)
         };
@@ -3283,42 +3285,36 @@ mod tests {
             linear,
             angular: 1.0,
         };
-        // 30° in a frame about the vertical (channel 4): fast, but not a jump. In the world the
-        // hem lags behind the hips (19.1 cm); carried by half the turn it lags about half as far
-        // (9.4 cm); carried by all of it, it moves on the body as on a body that stood still
-        // (2.7 cm). The linear share does not matter to a turn about the carrying joint.
+        // At full inertia the hem lags more than 10 cm behind the hips, at half the share about
+        // half as far, and carried fully it moves on the body as on a body that stood still.
+        let lags_by_its_share = |next: &[f32], share: &dyn Fn(f32) -> Inertia| {
+            let (full, half, none) = (
+                moved(next, Inertia::FULL),
+                moved(next, share(0.5)),
+                moved(next, share(0.0)),
+            );
+            assert!(full > 10.0, "{full} cm");
+            assert!(
+                half < 0.6 * full && half > 0.4 * full,
+                "{half} of {full} cm"
+            );
+            assert!(none < settling + 0.2, "{none} cm, {settling} cm settling");
+            full
+        };
+        // 30° in a frame about the vertical (channel 4): fast, but not a jump (19.1, 9.4 and
+        // 2.7 cm). The linear share does not matter to a turn about the carrying joint.
         let mut turned = a.clone();
         turned[4] += 30.0;
-        let (full, half, none) = (
-            moved(&turned, Inertia::FULL),
-            moved(&turned, angular(0.5)),
-            moved(&turned, angular(0.0)),
-        );
-        assert!(full > 10.0, "{full} cm");
-        assert!(
-            half < 0.6 * full && half > 0.4 * full,
-            "{half} of {full} cm"
-        );
-        assert!(none < settling + 0.2, "{none} cm, {settling} cm settling");
+        let full = lags_by_its_share(&turned, &angular);
         let travel_free = moved(&turned, linear(0.0));
         assert!(
             (travel_free - full).abs() < 0.01,
             "{travel_free} against {full} cm"
         );
-        // 30 cm sideways in a frame (Xposition, channel 0; a jump is 50): the same with travel.
+        // 30 cm sideways in a frame (Xposition, channel 0; a jump is 50).
         let mut moved_aside = a.clone();
         moved_aside[0] += 30.0;
-        let (full, half, none) = (
-            moved(&moved_aside, Inertia::FULL),
-            moved(&moved_aside, linear(0.5)),
-            moved(&moved_aside, linear(0.0)),
-        );
-        assert!(full > 10.0, "{full} cm");
-        assert!(
-            half < 0.6 * full && half > 0.4 * full,
-            "{half} of {full} cm"
-        );
-        assert!(none < settling + 0.2, "{none} cm, {settling} cm settling");
+        lags_by_its_share(&moved_aside, &linear);
     }
 
     #[test]
@@ -3357,20 +3353,12 @@ mod tests {
     #[test]
     fn a_root_turn_too_fast_for_a_person_turns_the_cloth_with_the_body() {
         let (rig, mut cloth, a) = skirt_dressed_on_the_walk();
-        let in_root = |cloth: &Cloth| {
-            let root = cloth.pose().bones[0].inverse();
-            cloth
-                .positions()
-                .iter()
-                .map(|&p| root.transform_point3a(p))
-                .collect::<Vec<_>>()
-        };
-        let before = in_root(&cloth);
+        let before = in_root_frame(&cloth);
         // The farthest any vertex moved, seen from the root, since `before`.
         let moved_from_before = |cloth: &Cloth| {
             before
                 .iter()
-                .zip(&in_root(cloth))
+                .zip(&in_root_frame(cloth))
                 .map(|(p, q)| p.distance(*q))
                 .fold(0.0f32, f32::max)
         };
