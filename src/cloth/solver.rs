@@ -621,7 +621,7 @@ pub struct Cloth {
     /// The bone whose motion carries the cloth below full [`SolverSettings::inertia`]: the one
     /// most rigid anchors are bound to.
     carry_bone: usize,
-    /// This substep's carry ([`Cloth::carry_delta`]), `None` at full root inertia.
+    /// This substep's carry ([`Cloth::carry_delta`]), `None` at full inertia.
     carry: Option<Affine3A>,
     cuffs: Vec<CuffLimit>,
     /// Capsule indices of the cuffs' bones.
@@ -2418,7 +2418,7 @@ pub fn evaluate(
 }
 
 /// The bone most of `anchors` are rigidly bound to (the loose ones if none is rigid; the root if
-/// there are none): the garment's own frame, which carries it below full root inertia.
+/// there are none): the garment's own frame, which carries it below full inertia.
 fn carry_bone(anchors: &[Anchor]) -> usize {
     let rigid = anchors.iter().any(|a| a.slack_cm <= 0.0);
     let mut counts: Vec<usize> = Vec::new();

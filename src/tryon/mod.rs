@@ -41,7 +41,7 @@ use crate::render::{GarmentRenderer, RenderSettings};
 use crate::skeleton::Skeleton;
 
 /// How much of its bone's travelling and turning a garment on *estimated* poses feels
-/// ([`SolverSettings::inertia`]; `run`, `demo`, `live`). An estimated body shakes: over the nine
+/// ([`SolverSettings::inertia`]; `run`, `demo`, `live`, `bench`). An estimated body shakes: over the nine
 /// selection renderings (`suitcap run` with the shipped suit against the generator's motion, fifth
 /// session of 2026-12-07) the root's RMS angular acceleration was 1.2–4.1 times the true one's
 /// and its RMS linear acceleration 2.8–63 times (per-sequence medians of true / estimated: 0.57

@@ -5,8 +5,10 @@
 //! enter a [`Full::DropOldest`] queue when the input is live, so a machine that falls behind drops
 //! old frames (counted, and shown) instead of delaying the picture; recorded input waits instead and
 //! loses nothing. Every later queue waits, so every pose that was estimated reaches the sink, which
-//! records it. The sink (on the calling thread, where a window must live) gets one [`Output`] per
-//! processed frame, in order.
+//! records it. With [`PoseStage::root_glitch_window_s`] (recorded input) the pose thread holds the
+//! frames of a root glitch back until it is over and passes them on filled in, in order. The sink
+//! (on the calling thread, where a window must live) gets one [`Output`] per processed frame, in
+//! order.
 //!
 //! Stopping: the sink returning `false`, or [`Controls::stop`] (set by Ctrl-C/SIGTERM), stops the
 //! capture; the frames already in flight still drain through every stage, so the take ends cleanly.
