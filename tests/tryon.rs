@@ -80,8 +80,15 @@ fn run_writes_the_take_the_composited_frames_and_a_preview() {
     assert!(gif.is_ok(), "preview.gif does not decode");
     let rows = std::fs::read_to_string(out.join("frames.csv")).expect("frames.csv");
     assert_eq!(rows.lines().count(), 15);
-    // The garment is put on once the person has been measured.
-    assert!(rows.lines().any(|l| l.contains(",worn,")), "{rows}");
+    // The recording is held while the person is measured (10 frames for the live mode's cloth),
+    // then the garment is put on at the first frame: no frame shows it missing for that.
+    assert!(
+        rows.lines()
+            .nth(1)
+            .is_some_and(|l| l.starts_with("0,1,") && l.contains(",worn,")),
+        "{rows}"
+    );
+    assert!(!rows.contains(",measuring,"), "{rows}");
     assert!(
         text(&output).contains("per-stage median"),
         "{}",

@@ -97,11 +97,13 @@ fn garment_choice(name: &str) -> anyhow::Result<GarmentChoice> {
     Ok(garment)
 }
 
-/// The cloth stage asked for, or `None` for `--garment none`.
+/// The cloth stage asked for, or `None` for `--garment none`. On recorded input the garment is
+/// worn from the first frame with a person (the frames held while the person is measured).
 fn cloth_stage(
     args: &GarmentArgs,
     template: &suitcap::skeleton::Skeleton,
     mode: SimulationMode,
+    input: InputKind,
 ) -> anyhow::Result<Option<ClothStage>> {
     if args.garment.eq_ignore_ascii_case("none") {
         return Ok(None);
@@ -109,6 +111,7 @@ fn cloth_stage(
     let mut options = ClothOptions::new(garment_choice(&args.garment)?, mode);
     options.material = material(&args.material)?;
     options.inertia = ESTIMATED_POSE_INERTIA;
+    options.dress_from_first_frame = input == InputKind::Recorded;
     Ok(Some(ClothStage::new(template, options)?))
 }
 
@@ -641,6 +644,7 @@ pub fn run(
         garment,
         &pose_stage.pipeline.regressor.skeleton.skeleton,
         mode,
+        InputKind::Recorded,
     )?;
     let render = render_stage(&pose_stage.pipeline);
     // Open once here to check the size and learn the rate; the capture thread opens its own.
@@ -1120,6 +1124,7 @@ pub fn live(
         garment,
         &pose_stage.pipeline.regressor.skeleton.skeleton,
         SimulationMode::Live,
+        InputKind::Live,
     )?;
     let render = render_stage(&pose_stage.pipeline);
     let mut window = Window::new(

@@ -2,12 +2,13 @@
 //!
 //! [`ClothStage`] turns each estimated pose (BVH channels of the regressor's template skeleton) into a
 //! simulated garment. It first measures the person ([`BodySizeEstimator`], a few frames of silhouette
-//! against the template body at the marker-pitch depth), then builds the collision rig at that size,
-//! generates (or loads) the garment around its rest pose, dresses it — blended from the rest pose into
-//! the current pose and settled — and from then on advances the cloth by the real time between frames
-//! in fixed substeps, with the body interpolated at every substep. When nobody is seen the garment
-//! is hidden; after [`LOST_AFTER_FRAMES`] such frames the garment is taken off and put on again when
-//! the person comes back.
+//! against the template body at the marker-pitch depth; recorded input is measured ahead with
+//! [`ClothStage::measure`], so the garment is on from the first frame), then builds the collision
+//! rig at that size, generates (or loads) the garment around its rest pose, dresses it — blended
+//! from the rest pose into the current pose and settled — and from then on advances the cloth by
+//! the real time between frames in fixed substeps, with the body interpolated at every substep.
+//! When nobody is seen the garment is hidden; after [`LOST_AFTER_FRAMES`] such frames the garment
+//! is taken off and put on again when the person comes back.
 //!
 //! [`RenderStage`] draws the garment from the camera's viewpoint ([`crate::render`]) and composites
 //! it into the frame with the debug overlays the user switched on ([`crate::composite`]).
@@ -120,7 +121,19 @@ pub struct ClothOptions {
     /// [`SolverSettings::inertia`]: [`Inertia::FULL`] (the default) for true motion,
     /// [`ESTIMATED_POSE_INERTIA`] for the poses the pose stage estimates.
     pub inertia: Inertia,
+    /// Recorded input: the runner holds the frames back from the first one with a person until
+    /// the person is measured ([`ClothStage::measure`]), then dresses the garment on the first of
+    /// them, so it is worn from there on instead of after the measuring frames. At most
+    /// [`HELD_SIZING_FRAMES_PER_NEEDED`] × `sizing_frames` frames are held; if fewer were measured
+    /// by then, or when the recording ends, the size comes from those measured
+    /// ([`ClothStage::settle_size`]). Off for a live picture, which is not held back.
+    pub dress_from_first_frame: bool,
 }
+
+/// How many frames, per measuring frame needed, the runner holds back at most for
+/// [`ClothOptions::dress_from_first_frame`] (frames whose silhouette does not measure, or without
+/// a person, are held too).
+pub const HELD_SIZING_FRAMES_PER_NEEDED: usize = 2;
 
 impl ClothOptions {
     pub fn new(garment: GarmentChoice, mode: SimulationMode) -> ClothOptions {
@@ -136,6 +149,7 @@ impl ClothOptions {
             edge_cm: None,
             check_tunnelling: false,
             inertia: Inertia::FULL,
+            dress_from_first_frame: false,
         }
     }
 
@@ -282,6 +296,51 @@ impl ClothStage {
         self.options.garment = garment;
     }
 
+    /// How many frames the runner may hold back while the person is measured
+    /// ([`ClothOptions::dress_from_first_frame`]); `None` when it holds none.
+    pub fn sizing_hold(&self) -> Option<usize> {
+        self.options
+            .dress_from_first_frame
+            .then_some(HELD_SIZING_FRAMES_PER_NEEDED * self.options.sizing_frames.max(1))
+    }
+
+    /// Measures the person in one frame without advancing the cloth: the frame counts towards
+    /// the size as [`ClothStage::advance`] would count it. For input that can be held back while
+    /// the person is measured (the runner's recorded input), so that the garment is on from the
+    /// first frame; those frames then go through [`ClothStage::advance`] in order, which measures
+    /// nothing more. Returns whether the size is known.
+    pub fn measure(
+        &mut self,
+        frame: &[f32],
+        person: bool,
+        silhouette: Silhouette,
+        camera: &Camera,
+    ) -> bool {
+        if self.size.is_none() && person {
+            self.sizer.add_frame(
+                silhouette,
+                &self.template_body,
+                &self.template,
+                frame,
+                camera,
+            );
+            if self.sizer.frames() >= self.options.sizing_frames {
+                self.size = Some(self.sizer.estimate());
+            }
+        }
+        self.size.is_some()
+    }
+
+    /// Ends the measurement with the frames counted so far, when there were any but fewer than
+    /// [`ClothOptions::sizing_frames`] (a recording that ends, or whose held frames run out, before
+    /// enough were measured). Returns whether the size is known.
+    pub fn settle_size(&mut self) -> bool {
+        if self.size.is_none() && self.sizer.frames() > 0 {
+            self.size = Some(self.sizer.estimate());
+        }
+        self.size.is_some()
+    }
+
     /// Advances to the pose `frame` seen at `time_s` (stream clock, seconds); `person` false when
     /// nobody was found. `silhouette` and `camera` serve the body-size measurement.
     pub fn advance(
@@ -303,27 +362,13 @@ impl ClothStage {
             return Ok(ClothFrame::hidden(ClothStatus::NoPerson, ms(started)));
         }
         self.missing = 0;
-        let size = match self.size {
-            Some(size) => size,
-            None => {
-                self.sizer.add_frame(
-                    silhouette,
-                    &self.template_body,
-                    &self.template,
-                    frame,
-                    camera,
-                );
-                if self.sizer.frames() < self.options.sizing_frames {
-                    let status = ClothStatus::Sizing {
-                        seen: self.sizer.frames(),
-                        needed: self.options.sizing_frames,
-                    };
-                    return Ok(ClothFrame::hidden(status, ms(started)));
-                }
-                let size = self.sizer.estimate();
-                self.size = Some(size);
-                size
-            }
+        self.measure(frame, person, silhouette, camera);
+        let Some(size) = self.size else {
+            let status = ClothStatus::Sizing {
+                seen: self.sizer.frames(),
+                needed: self.options.sizing_frames,
+            };
+            return Ok(ClothFrame::hidden(status, ms(started)));
         };
         let wanted = &self.options.garment;
         let mut redressed = false;
@@ -595,6 +640,84 @@ mod tests {
         assert_eq!(stage.size(), None);
         let frame = step(&mut stage, &motion, 4, false);
         assert_eq!(frame.status, ClothStatus::NoPerson);
+    }
+
+    /// The camera of [`step`], at 128×96 so that the walk's first frames are seen whole.
+    fn whole_view() -> Camera {
+        Camera::look_at(
+            Intrinsics::from_fov(128, 96, 60.0),
+            Vec3::new(0.0, 100.0, 400.0),
+            Vec3::new(0.0, 90.0, 0.0),
+            Vec3::Y,
+        )
+    }
+
+    /// The template body of `stage` posed at the walk's frame `k`, as [`whole_view`] sees it: a
+    /// silhouette that measures the template's own size.
+    fn own_silhouette(stage: &ClothStage, motion: &crate::bvh::Motion, k: usize) -> Mask {
+        let mut world = Vec::new();
+        motion
+            .skeleton
+            .forward_kinematics(motion.frame(k), &mut world);
+        let mut depth = crate::raster::DepthBuffer::new(128, 96);
+        crate::body_size::BodyMasker::new(&stage.template_body).mask(
+            &world,
+            &whole_view(),
+            &mut depth,
+        )
+    }
+
+    #[test]
+    fn a_recording_measured_ahead_is_dressed_at_its_first_frame() {
+        let motion = walk();
+        let camera = whole_view();
+        let mut stage = stage(&motion, None);
+        let masks: Vec<Mask> = (0..3).map(|k| own_silhouette(&stage, &motion, k)).collect();
+        let measure = |stage: &mut ClothStage, k: usize, person: bool| {
+            stage.measure(
+                motion.frame(k),
+                person,
+                Silhouette::whole(&masks[k]),
+                &camera,
+            )
+        };
+        assert!(!measure(&mut stage, 0, true));
+        // A frame without a person measures nothing.
+        assert!(!measure(&mut stage, 1, false));
+        assert!(!measure(&mut stage, 1, true));
+        assert!(measure(&mut stage, 2, true));
+        let size = stage.size().expect("measured");
+        assert_eq!(size.frames, 3);
+        // The template measured on its own silhouette is the template's size.
+        assert!((size.height_scale - 1.0).abs() < 0.05, "{size:?}");
+        // The held frames then go through `advance` from the first one: worn at once, measured no
+        // further.
+        let mut advance = |k: usize| {
+            let silhouette = Silhouette::whole(&masks[k]);
+            let time = k as f64 / 30.0;
+            let frame = stage.advance(motion.frame(k), time, true, silhouette, &camera);
+            frame.expect("advances")
+        };
+        let first = advance(0);
+        assert_eq!(first.status, ClothStatus::Worn { size });
+        assert!(first.redressed && !first.positions.is_empty());
+        assert!(!advance(1).redressed);
+        assert_eq!(stage.size(), Some(size));
+    }
+
+    #[test]
+    fn a_recording_too_short_to_measure_fully_is_sized_from_what_was_measured() {
+        let motion = walk();
+        let camera = whole_view();
+        let mut stage = stage(&motion, None);
+        // Nothing measured: no size to settle on.
+        let empty = Mask::empty(128, 96);
+        assert!(!stage.measure(motion.frame(0), true, Silhouette::whole(&empty), &camera));
+        assert!(!stage.settle_size());
+        let mask = own_silhouette(&stage, &motion, 1);
+        assert!(!stage.measure(motion.frame(1), true, Silhouette::whole(&mask), &camera));
+        assert!(stage.settle_size());
+        assert_eq!(stage.size().map(|s| s.frames), Some(1));
     }
 
     #[test]

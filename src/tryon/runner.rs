@@ -6,7 +6,11 @@
 //! old frames (counted, and shown) instead of delaying the picture; recorded input waits instead and
 //! loses nothing. Every later queue waits, so every pose that was estimated reaches the sink, which
 //! records it. With [`PoseStage::root_glitch_window_s`] (recorded input) the pose thread holds the
-//! frames of a root glitch back until it is over and passes them on filled in, in order. The sink
+//! frames of a root glitch back until it is over and passes them on filled in, in order; with
+//! [`ClothOptions::dress_from_first_frame`](super::ClothOptions) (recorded input) the cloth thread
+//! holds the frames from the first person on until the person is measured, so the garment is
+//! worn from that first frame (at most [`ClothStage::sizing_hold`] frames: about 25 MB at
+//! 640×480, 125 MB at 1440×1080 for the quality mode's 20 measuring frames). The sink
 //! (on the calling thread, where a window must live) gets one [`Output`] per processed frame, in
 //! order.
 //!
@@ -294,33 +298,29 @@ pub fn run(
         {
             let (input, output, controls) = (posed.clone(), dressed.clone(), Arc::clone(&controls));
             scope.spawn(move || {
+                let mut hold = cloth_stage
+                    .as_ref()
+                    .and_then(ClothStage::sizing_hold)
+                    .map(SizingHold::new);
+                let camera = &camera;
+                let dress_all = |stage: &mut Option<ClothStage>, frames: Vec<Posed>| {
+                    frames.into_iter().all(|posed| {
+                        let dressed = dress(stage.as_mut(), &controls, posed, camera);
+                        output.push(dressed).is_ok()
+                    })
+                };
                 while let Some(posed) = input.pop() {
-                    let p = &posed.pose;
-                    let (cloth, cloth_error) = match cloth_stage.as_mut() {
-                        None => (ClothFrame::hidden(ClothStatus::Off, 0.0), None),
-                        Some(stage) => {
-                            if let Some(garment) = controls.take_garment() {
-                                stage.set_garment(garment);
-                            }
-                            let time = posed.captured.timestamp_s;
-                            let silhouette = Silhouette::from(p);
-                            match stage.advance(&p.frame, time, p.person, silhouette, &camera) {
-                                Ok(cloth) => (cloth, None),
-                                Err(e) => (
-                                    ClothFrame::hidden(ClothStatus::Off, 0.0),
-                                    Some(e.to_string()),
-                                ),
-                            }
-                        }
+                    let frames = match (hold.as_mut(), cloth_stage.as_mut()) {
+                        (Some(hold), Some(stage)) => hold.push(stage, posed, camera),
+                        _ => vec![posed],
                     };
-                    let item = Dressed {
-                        posed,
-                        cloth,
-                        cloth_error,
-                    };
-                    if output.push(item).is_err() {
+                    if !dress_all(&mut cloth_stage, frames) {
                         break;
                     }
+                }
+                if let (Some(hold), Some(stage)) = (hold.as_mut(), cloth_stage.as_mut()) {
+                    let frames = hold.finish(stage);
+                    dress_all(&mut cloth_stage, frames);
                 }
                 input.close();
                 output.close();
@@ -415,6 +415,82 @@ pub fn run(
     summary.stopped_by_user = controls.stopped();
     summary.seconds = started.elapsed().as_secs_f64();
     summary
+}
+
+/// The cloth stage's work on one frame: the garment the user switched to, then the cloth advanced
+/// to the frame's pose (hidden, with the error, where it cannot be simulated).
+fn dress(
+    stage: Option<&mut ClothStage>,
+    controls: &Controls,
+    posed: Posed,
+    camera: &Camera,
+) -> Dressed {
+    let p = &posed.pose;
+    let (cloth, cloth_error) = match stage {
+        None => (ClothFrame::hidden(ClothStatus::Off, 0.0), None),
+        Some(stage) => {
+            if let Some(garment) = controls.take_garment() {
+                stage.set_garment(garment);
+            }
+            let time = posed.captured.timestamp_s;
+            let silhouette = Silhouette::from(p);
+            match stage.advance(&p.frame, time, p.person, silhouette, camera) {
+                Ok(cloth) => (cloth, None),
+                Err(e) => (
+                    ClothFrame::hidden(ClothStatus::Off, 0.0),
+                    Some(e.to_string()),
+                ),
+            }
+        }
+    };
+    Dressed {
+        posed,
+        cloth,
+        cloth_error,
+    }
+}
+
+/// Recorded frames held back from the first one with a person until the cloth stage has
+/// measured the person ([`ClothOptions::dress_from_first_frame`](super::ClothOptions)), so that
+/// the garment is put on at the first of them.
+struct SizingHold {
+    held: Vec<Posed>,
+    /// Frames held at most ([`ClothStage::sizing_hold`]).
+    limit: usize,
+}
+
+impl SizingHold {
+    fn new(limit: usize) -> SizingHold {
+        SizingHold {
+            held: Vec::new(),
+            limit,
+        }
+    }
+
+    /// Takes the next frame; returns the frames that go on to the cloth now, in order. Frames
+    /// before the first person pass at once; from then on they are held (and measured) until the
+    /// size is known or `limit` frames are held, when the size comes from those measured.
+    fn push(&mut self, stage: &mut ClothStage, posed: Posed, camera: &Camera) -> Vec<Posed> {
+        if self.held.is_empty() && (stage.size().is_some() || !posed.pose.person) {
+            return vec![posed];
+        }
+        let p = &posed.pose;
+        let sized = stage.measure(&p.frame, p.person, Silhouette::from(p), camera);
+        self.held.push(posed);
+        if sized || self.held.len() >= self.limit {
+            stage.settle_size();
+            return std::mem::take(&mut self.held);
+        }
+        Vec::new()
+    }
+
+    /// The end of the stream: the frames still held, the size from those measured.
+    fn finish(&mut self, stage: &mut ClothStage) -> Vec<Posed> {
+        if !self.held.is_empty() {
+            stage.settle_size();
+        }
+        std::mem::take(&mut self.held)
+    }
 }
 
 /// Passes the frames a [`RootGlitchRepair`] let go of on to the next stage, each with its pose
