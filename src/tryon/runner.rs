@@ -9,10 +9,10 @@
 //! frames of a root glitch back until it is over and passes them on filled in, in order; with
 //! [`ClothOptions::dress_from_first_frame`](super::ClothOptions) (recorded input) the cloth thread
 //! holds the frames from the first person on until the person is measured, so the garment is
-//! worn from that first frame (at most [`ClothStage::sizing_hold`] frames: about 25 MB at
-//! 640×480, 125 MB at 1440×1080 for the quality mode's 20 measuring frames). The sink
-//! (on the calling thread, where a window must live) gets one [`Output`] per processed frame, in
-//! order.
+//! worn from that first frame: the quality mode's 20 measuring frames when each one measures,
+//! about 25 MB at 640×480 and 125 MB at 1440×1080, and at most [`ClothStage::sizing_hold`]
+//! (twice that). The sink (on the calling thread, where a window must live) gets one [`Output`]
+//! per processed frame, in order.
 //!
 //! Stopping: the sink returning `false`, or [`Controls::stop`] (set by Ctrl-C/SIGTERM), stops the
 //! capture; the frames already in flight still drain through every stage, so the take ends cleanly.
