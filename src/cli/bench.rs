@@ -219,6 +219,7 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
             &mut image,
             &camera,
             &c,
+            result.person.then_some(&result.mask),
             &overlay,
             Overlays::default(),
             &[],

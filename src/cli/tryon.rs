@@ -1011,7 +1011,8 @@ pub fn drape(
         cloth_ms.push(cloth.milliseconds);
         let pose =
             suitcap::tryon::PoseOverlay::new(None, Vec::new(), &template, motion.frame(k), &camera);
-        let (r, c) = render.draw(&mut image, &camera, &cloth, &pose, overlays, &[], &[])?;
+        // The true body: it hides the garment wherever it is in front.
+        let (r, c) = render.draw(&mut image, &camera, &cloth, None, &pose, overlays, &[], &[])?;
         render_ms.push(r + c);
         write_png(&image, &out_frames.join(format!("{k:06}.png")))?;
         preview.push(&image)?;

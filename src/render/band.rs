@@ -8,7 +8,9 @@
 //! 1. the garment's front faces, shaded into the layer;
 //! 2. the body capsules, depth-only: a capsule fragment nearer than the cloth erases the cloth's pixel
 //!    back to transparent (the real arm shows there) — the same result as drawing the capsules first,
-//!    but capsules hidden inside the garment are now culled by the occlusion tiles;
+//!    but capsules hidden inside the garment are now culled by the occlusion tiles. With the
+//!    person's mask ([`Scene::person`]) only where the camera sees the person: an estimated arm
+//!    that strays off the real one over the room would cut a hole showing the room;
 //! 3. the garment's back faces (the inside), culled by the tiles where the front cloth or the body
 //!    covers them, which is almost everywhere except openings;
 //! 4. the antialiasing fins along silhouette edges ([`super::silhouette`]).
@@ -16,6 +18,7 @@
 //! Between passes the occlusion tiles ([`super::occlusion`]) are rebuilt from the depth buffer. The
 //! band hands its finished rows of premultiplied RGBA back to the renderer's layer.
 
+use crate::mask::Mask;
 use crate::raster::{draw_triangle, Cull, DepthBuffer, Fragment, ScreenVertex};
 
 use super::capsule_mesh::CapsuleMesh;
@@ -43,6 +46,23 @@ pub struct Scene<'a> {
     /// Mesh edges for the fins (empty: no antialiasing).
     pub edges: &'a [MeshEdge],
     pub near: f32,
+    /// Where the camera sees the person; `None`: everywhere.
+    pub person: Option<PersonPixels<'a>>,
+}
+
+/// The person's mask of the frame and where the layer's first pixel lies in it.
+#[derive(Clone, Copy, Debug)]
+pub struct PersonPixels<'a> {
+    pub mask: &'a Mask,
+    pub origin: (u32, u32),
+}
+
+impl PersonPixels<'_> {
+    /// Whether layer pixel (`x`, `y`) shows the person (outside the mask: no).
+    pub fn contains(&self, x: u32, y: u32) -> bool {
+        let (fx, fy) = (self.origin.0 + x, self.origin.1 + y);
+        fx < self.mask.width() && fy < self.mask.height() && self.mask.get(fx, fy)
+    }
 }
 
 /// One capsule's vertices in [`Scene::capsule_screen`].
@@ -139,9 +159,18 @@ impl Band {
                     continue;
                 }
                 drew_capsule = true;
-                draw_triangle(&mut self.depth, v, Cull::Back, near, |f| {
-                    pixels[4 * f.index..4 * f.index + 4].fill(0)
-                });
+                // Two closures, so that without a mask the pixel loop is the plain one.
+                let erase = |pixels: &mut [u8], f: &Fragment| pixels[4 * f.index..][..4].fill(0);
+                match scene.person {
+                    None => {
+                        draw_triangle(&mut self.depth, v, Cull::Back, near, |f| erase(pixels, &f))
+                    }
+                    Some(person) => draw_triangle(&mut self.depth, v, Cull::Back, near, |f| {
+                        if person.contains(f.x, y0 + f.y) {
+                            erase(pixels, &f)
+                        }
+                    }),
+                }
             }
         }
         if drew_capsule {

@@ -15,8 +15,11 @@
 //!    *depth-only*, each tessellated to a small closed mesh ([`capsule_mesh`]) with its radii reduced
 //!    by [`RenderSettings::capsule_inset`] so cloth lying on the body wins the depth test — where a
 //!    capsule is nearer than the cloth (an arm in front) it erases the cloth's pixel and the real arm
-//!    of the camera image shows; then the back faces (the garment's inside, seen through a neckline or
-//!    under a hem) in [`GarmentStyle::back`], both sides drawn ([`crate::raster::Cull::None`]).
+//!    of the camera image shows — given the frame's mask of the person
+//!    ([`GarmentRenderer::render_over`]), only where the camera sees the person, since the capsules
+//!    are an estimate and the room has no arm to show; then the back faces (the garment's inside,
+//!    seen through a neckline or under a hem) in [`GarmentStyle::back`], both sides drawn
+//!    ([`crate::raster::Cull::None`]).
 //!    Per 8 × 8 tile farthest depths ([`occlusion`]) skip capsules hidden inside the garment and back
 //!    faces behind the front cloth or the body without walking their pixels; the result is the same
 //!    as drawing everything in any order.
@@ -41,8 +44,9 @@ use tiny_skia::{Pixmap, PixmapRef};
 
 use crate::camera::Camera;
 use crate::cloth::Capsule;
+use crate::mask::Mask;
 use crate::raster::ScreenVertex;
-use band::{Band, CapsuleSpan, Scene};
+use band::{Band, CapsuleSpan, PersonPixels, Scene};
 use capsule_mesh::CapsuleMesh;
 use silhouette::{EdgeTable, Facing};
 
@@ -306,6 +310,22 @@ impl GarmentRenderer {
         triangles: &[[u32; 3]],
         capsules: &[Capsule],
     ) -> &GarmentLayer {
+        self.render_over(camera, vertices, triangles, capsules, None)
+    }
+
+    /// [`GarmentRenderer::render`] over a frame in which the camera sees the person where `person`
+    /// (a mask of the frame's size) is set: the capsules hide the garment only there. The body the
+    /// garment is simulated on is estimated; where an arm of it strays off the real one onto the
+    /// room, hiding the garment would show the room through a hole, with no arm in it. A mask of
+    /// another size is ignored.
+    pub fn render_over(
+        &mut self,
+        camera: &Camera,
+        vertices: &[Vec3],
+        triangles: &[[u32; 3]],
+        capsules: &[Capsule],
+        person: Option<&Mask>,
+    ) -> &GarmentLayer {
         let (width, height) = (camera.intrinsics.width, camera.intrinsics.height);
         let near = self.settings.near;
         project_vertices(camera, vertices, near, &mut self.screen);
@@ -352,6 +372,12 @@ impl GarmentRenderer {
                 &[]
             },
             near,
+            person: person
+                .filter(|m| (m.width(), m.height()) == (width, height))
+                .map(|mask| PersonPixels {
+                    mask,
+                    origin: (rect.x, rect.y),
+                }),
         };
         let threads = if self.settings.parallel {
             rayon::current_num_threads().max(1)
@@ -621,6 +647,32 @@ mod tests {
             radius_a: 10.0,
             radius_b: 10.0,
         }
+    }
+
+    #[test]
+    fn a_capsule_hides_the_garment_only_where_the_camera_sees_the_person() {
+        let mut r = GarmentRenderer::new(flat());
+        // Columns 24..40 of row 32 (±40 cm at 150 cm, fx 32), behind the bar (rows 29..35).
+        let (v, t) = triangle(150.0, 40.0, true);
+        // The person seen in the frame's left half only (columns 0..32).
+        let mut person = Mask::empty(64, 64);
+        for y in 0..64 {
+            for x in 0..32 {
+                person.pixels_mut()[y * 64 + x] = true;
+            }
+        }
+        let layer = r.render_over(&camera(), &v, &t, &[bar()], Some(&person));
+        let (left, right) = (layer.pixel(28, 32), layer.pixel(36, 32));
+        // Left of column 32 the bar hides the triangle; right of it the bar is an estimate over
+        // the room, and the triangle shows.
+        assert_eq!((left[3], right[3]), (0, 255));
+        // Nobody seen: the bar hides nothing; a mask of another size is ignored.
+        let nobody = Mask::empty(64, 64);
+        let layer = r.render_over(&camera(), &v, &t, &[bar()], Some(&nobody));
+        assert_eq!(layer.pixel(32, 32)[3], 255);
+        let other = Mask::empty(32, 32);
+        let layer = r.render_over(&camera(), &v, &t, &[bar()], Some(&other));
+        assert_eq!(layer.pixel(36, 32)[3], 0);
     }
 
     #[test]

@@ -510,14 +510,17 @@ impl RenderStage {
     }
 
     /// Draws the garment (when worn) and the overlays into `frame`; `text` lines go top left when
-    /// timings are on, `banner` lines (status, recording, drops) always. Returns the milliseconds
-    /// spent rendering and compositing.
+    /// timings are on, `banner` lines (status, recording, drops) always. With `person`, the
+    /// frame's mask of the person, the body hides the garment only where the camera sees the
+    /// person ([`GarmentRenderer::render_over`]). Returns the milliseconds spent rendering and
+    /// compositing.
     #[allow(clippy::too_many_arguments)] // independent per-frame inputs; a struct adds only noise
     pub fn draw(
         &mut self,
         frame: &mut RgbImage,
         camera: &Camera,
         cloth: &ClothFrame,
+        person: Option<&Mask>,
         pose: &PoseOverlay,
         overlays: Overlays,
         text: &[String],
@@ -526,8 +529,13 @@ impl RenderStage {
         let started = Instant::now();
         let worn = matches!(cloth.status, ClothStatus::Worn { .. }) && !cloth.positions.is_empty();
         if worn {
-            self.renderer
-                .render(camera, &cloth.positions, &cloth.triangles, &cloth.occluders);
+            self.renderer.render_over(
+                camera,
+                &cloth.positions,
+                &cloth.triangles,
+                &cloth.occluders,
+                person,
+            );
         }
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
         let started = Instant::now();

@@ -366,7 +366,14 @@ pub fn run(
                     let mut image = captured.image;
                     let (render, composite) = render_stage
                         .draw(
-                            &mut image, &camera, &cloth, &overlay, overlays, &text, &lines,
+                            &mut image,
+                            &camera,
+                            &cloth,
+                            pose.person.then_some(&pose.mask),
+                            &overlay,
+                            overlays,
+                            &text,
+                            &lines,
                         )
                         .unwrap_or((0.0, 0.0));
                     let times = FrameTimes {
