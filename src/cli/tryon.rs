@@ -19,7 +19,7 @@ use suitcap::camera::Camera;
 use suitcap::cloth::material::Material;
 use suitcap::pipeline::PosePipeline;
 use suitcap::pose::smoothing::{
-    repair_root_glitches, JointLimits, PoseFilter, SmoothingParams, JOINT_LIMITS_FILE,
+    index_ranges, repair_root_glitches, JointLimits, PoseFilter, SmoothingParams, JOINT_LIMITS_FILE,
 };
 use suitcap::preview::{GifPreview, PreviewSettings};
 use suitcap::render::RenderSettings;
@@ -461,13 +461,13 @@ impl Take {
                 *f = true;
             }
         }
-        self.glitches.clear();
-        for (k, _) in filled.iter().enumerate().filter(|(_, &f)| f) {
-            match self.glitches.last_mut() {
-                Some(span) if span.end == k => span.end += 1,
-                _ => self.glitches.push(k..k + 1),
-            }
-        }
+        self.glitches = index_ranges(
+            filled
+                .iter()
+                .enumerate()
+                .filter(|(_, &f)| f)
+                .map(|(k, _)| k),
+        );
         Motion::new(self.motion.skeleton.clone(), 1.0 / self.fps, values)?.write(&self.path)?;
         Ok(self.path.clone())
     }

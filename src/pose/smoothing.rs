@@ -78,12 +78,20 @@ pub fn repair_root_glitches(
         released.extend(repair.push(frame.to_vec(), k as f64, k));
     }
     released.extend(repair.finish());
-    let mut spans: Vec<std::ops::Range<usize>> = Vec::new();
-    for r in released.into_iter().filter(|r| r.filled) {
+    let filled = released.into_iter().filter(|r| r.filled).map(|r| {
         values[r.item * n..(r.item + 1) * n].copy_from_slice(&r.frame);
+        r.item
+    });
+    index_ranges(filled)
+}
+
+/// Ascending frame indices as ranges of consecutive ones: `[1, 2, 3, 5]` → `[1..4, 5..6]`.
+pub fn index_ranges(indices: impl IntoIterator<Item = usize>) -> Vec<std::ops::Range<usize>> {
+    let mut spans: Vec<std::ops::Range<usize>> = Vec::new();
+    for k in indices {
         match spans.last_mut() {
-            Some(span) if span.end == r.item => span.end += 1,
-            _ => spans.push(r.item..r.item + 1),
+            Some(span) if span.end == k => span.end += 1,
+            _ => spans.push(k..k + 1),
         }
     }
     spans
@@ -760,6 +768,13 @@ mod tests {
             .enumerate()
             .flat_map(|(k, &y)| [0.0, 0.0, 0.0, 0.0, y, 0.0, k as f32, 0.0, 0.0])
             .collect()
+    }
+
+    #[test]
+    fn consecutive_indices_make_one_range() {
+        assert_eq!(index_ranges([1, 2, 3, 5, 7, 8]), vec![1..4, 5..6, 7..9]);
+        assert_eq!(index_ranges([0]), vec![0..1]);
+        assert!(index_ranges(std::iter::empty()).is_empty());
     }
 
     #[test]
