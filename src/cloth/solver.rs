@@ -3258,6 +3258,16 @@ mod tests {
             .collect()
     }
 
+    /// The farthest any vertex of `cloth` moved, seen from its body's root, since it was at
+    /// `before` ([`in_root_frame`]).
+    fn farthest_from(before: &[Vec3A], cloth: &Cloth) -> f32 {
+        before
+            .iter()
+            .zip(&in_root_frame(cloth))
+            .map(|(p, q)| p.distance(*q))
+            .fold(0.0f32, f32::max)
+    }
+
     #[test]
     fn below_full_inertia_the_garment_is_carried_partly_with_its_bone() {
         let (rig, cloth, a) = skirt_dressed_on_the_walk();
@@ -3269,11 +3279,7 @@ mod tests {
             let mut c = cloth.clone();
             c.settings.inertia = inertia;
             assert!(!c.step_frame(&rig, &a, next).jumped);
-            before
-                .iter()
-                .zip(&in_root_frame(&c))
-                .map(|(p, q)| p.distance(*q))
-                .fold(0.0f32, f32::max)
+            farthest_from(&before, &c)
         };
         // The skirt still settles a little on a body that does not move.
         let settling = moved(&a, Inertia::FULL);
@@ -3354,14 +3360,6 @@ mod tests {
     fn a_root_turn_too_fast_for_a_person_turns_the_cloth_with_the_body() {
         let (rig, mut cloth, a) = skirt_dressed_on_the_walk();
         let before = in_root_frame(&cloth);
-        // The farthest any vertex moved, seen from the root, since `before`.
-        let moved_from_before = |cloth: &Cloth| {
-            before
-                .iter()
-                .zip(&in_root_frame(cloth))
-                .map(|(p, q)| p.distance(*q))
-                .fold(0.0f32, f32::max)
-        };
         // CMU's root channels are X, Y, Z position then Z, Y, X rotation: channel 4 turns the body
         // about the vertical. 20° in a frame is a fast turn a dancer makes; 90° is a glitch.
         let yaw = |degrees: f32| {
@@ -3375,12 +3373,12 @@ mod tests {
         let info = cloth.step_frame(&rig, &a, &yaw(90.0));
         assert!(info.jumped && !info.redressed);
         // Seen from the root the garment hardly moved: it turned with the body.
-        let moved = moved_from_before(&cloth);
+        let moved = farthest_from(&before, &cloth);
         assert!(moved < 2.0, "{moved} cm");
         // Without the jump the same turn whips the hem around the legs.
         turned.settings.jump_turn_degrees = 180.0;
         assert!(!turned.step_frame(&rig, &a, &yaw(90.0)).jumped);
-        let whipped = moved_from_before(&turned);
+        let whipped = farthest_from(&before, &turned);
         assert!(whipped > 20.0, "{whipped} cm");
     }
 
