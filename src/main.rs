@@ -340,9 +340,10 @@ fn capture(
     }
     let seconds = started.elapsed().as_secs_f64();
     println!(
-        "{written} frames written to {} in {seconds:.1} s; {} corrupt frames skipped",
+        "{} written to {} in {seconds:.1} s; {} skipped",
+        cli::counted(written as usize, "frame", "frames"),
         out.display(),
-        skipped.len()
+        cli::counted(skipped.len(), "corrupt frame", "corrupt frames")
     );
     for s in &skipped {
         println!("  skipped: {s}");
@@ -690,7 +691,13 @@ fn segment(
         }
         frames += 1;
     }
-    println!("{frames} masks written to {}; {} corrupt frames skipped; {empty_frames} frames with nobody", out.display(), skipped.len());
+    println!(
+        "{} written to {}; {} skipped; {} with nobody",
+        cli::counted(frames, "mask", "masks"),
+        out.display(),
+        cli::counted(skipped.len(), "corrupt frame", "corrupt frames"),
+        cli::counted(empty_frames, "frame", "frames")
+    );
     let grid = match last_height {
         Some(height) => format!(
             "the cut's {}×{} grid, factor {}",
@@ -870,7 +877,7 @@ fn describe(
     }
     let median = cli::median(&times);
     let mean_markers = counts.iter().sum::<usize>() as f64 / counts.len().max(1) as f64;
-    println!("{frames} {} descriptors ({} values) written to {}; median {median:.2} ms per frame, {mean_markers:.0} markers per frame; {} corrupt frames skipped", kind.name(), kind.len(), out.display(), skipped.len());
+    println!("{frames} {} descriptors ({} values) written to {}; median {median:.2} ms per frame, {mean_markers:.0} markers per frame; {}", kind.name(), kind.len(), out.display(), cli::counted(skipped.len(), "corrupt frame skipped", "corrupt frames skipped"));
     if truth.is_some() {
         println!(
             "markers vs truth (those with ≥ 60 % of their square visible): recall {:.4} ({} of {}), precision {:.4} ({} of {} detections); of those with ≥ {COUNTED_VISIBLE_PX} px visible too: recall {:.4} ({} of {})",

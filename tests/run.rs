@@ -140,7 +140,7 @@ fn run_writes_one_bvh_frame_per_input_frame() {
         let take = suitcap::bvh::Motion::load(&out.join("take.bvh")).expect("a valid BVH");
         assert_eq!(take.frame_count(), frames, "{printed}");
         assert_eq!(
-            printed.contains("; 1 BVH frames filled in"),
+            printed.contains("; 1 BVH frame filled in"),
             frames == 12,
             "{printed}"
         );

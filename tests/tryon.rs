@@ -153,6 +153,7 @@ fn a_corrupt_frame_is_skipped_and_named_and_an_empty_scene_hides_the_garment() {
     assert!(output.status.success(), "{message}");
     assert!(
         message.contains("2 corrupt frames skipped")
+            && message.contains("(1 frame with nobody:")
             && message.contains("000006.png")
             && message.contains("000011.jpg")
             && message.contains("truncated"),
@@ -439,13 +440,14 @@ fn live_shows_and_records_every_frame_of_a_paced_input() {
         .expect("runs");
     let message = text(&output);
     assert!(output.status.success(), "{message}");
-    // "N frames shown, D camera frames dropped (…)".
-    let count_before = |words: &str| -> Option<usize> {
-        let at = message.find(words)?;
+    // "N frames shown, D camera frames dropped (…)", the noun singular for 1.
+    let count_before = |one: &str, many: &str| -> Option<usize> {
+        let at = message.find(many).or_else(|| message.find(one))?;
         message[..at].split_whitespace().last()?.parse().ok()
     };
-    let shown = count_before(" frames shown").expect("the shown count");
-    let dropped = count_before(" camera frames dropped").expect("the dropped count");
+    let shown = count_before(" frame shown", " frames shown").expect("the shown count");
+    let dropped =
+        count_before(" camera frame dropped", " camera frames dropped").expect("the dropped count");
     assert!(shown > 0, "{message}");
     assert_eq!(shown + dropped, 12, "{message}");
     // The take keeps the input's time: a dropped frame is filled in between its neighbours.

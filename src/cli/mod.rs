@@ -3,6 +3,12 @@
 pub mod bench;
 pub mod tryon;
 
+/// `n` and the noun in the number `n` asks for, for a report: `counted(1, "frame", "frames")` is
+/// "1 frame", `counted(0, "frame", "frames")` "0 frames".
+pub fn counted(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
 /// The median of `values` for a report; 0 when empty.
 pub fn median(values: &[f64]) -> f64 {
     suitcap::stats::median(values).unwrap_or(0.0)

@@ -14,6 +14,7 @@ use anyhow::{bail, Context};
 use clap::Args;
 use image::RgbImage;
 
+use super::counted;
 use suitcap::bvh::Motion;
 use suitcap::camera::Camera;
 use suitcap::cloth::material::Material;
@@ -474,14 +475,12 @@ impl Take {
 
     /// "; N BVH frames of M root glitches filled in" after a write that filled any, else "".
     fn glitches_clause(&self) -> String {
-        let plural =
-            |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
         match self.glitches.iter().map(|g| g.len()).sum::<usize>() {
             0 => String::new(),
             frames => format!(
                 "; {} of {} (the whole body turning faster than a person can) filled in between the frames around them",
-                plural(frames, "BVH frame", "BVH frames"),
-                plural(self.glitches.len(), "root glitch", "root glitches")
+                counted(frames, "BVH frame", "BVH frames"),
+                counted(self.glitches.len(), "root glitch", "root glitches")
             ),
         }
     }
@@ -778,14 +777,18 @@ fn count_frames(input: &str) -> Option<u64> {
 fn report(summary: &RunSummary, take: &Take, nobody: usize, timings: &TimingLog) {
     let filled = match take.held() {
         0 => String::new(),
-        n => format!("; {n} BVH frames filled in between the poses around them"),
+        n => format!(
+            "; {} filled in between the poses around them",
+            counted(n, "BVH frame", "BVH frames")
+        ),
     };
     println!(
-        "{} frames → {} ({nobody} frames with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} corrupt frames skipped; {} camera frames dropped{filled}{}; {:.1} s ({:.1} frames/s)",
-        take.frames(),
+        "{} → {} ({} with nobody: previous pose kept, garment hidden, flagged in frames.csv); {} skipped; {} dropped{filled}{}; {:.1} s ({:.1} frames/s)",
+        counted(take.frames(), "frame", "frames"),
         take.path.display(),
-        summary.skipped.len(),
-        summary.dropped,
+        counted(nobody, "frame", "frames"),
+        counted(summary.skipped.len(), "corrupt frame", "corrupt frames"),
+        counted(summary.dropped as usize, "camera frame", "camera frames"),
         take.glitches_clause(),
         summary.seconds,
         summary.frames as f64 / summary.seconds.max(1e-9)
@@ -1044,7 +1047,7 @@ pub fn drape(
     let (dressing, moving) = quality.split_at(quality.len().min(1));
     let (dressing, moving) = (tunnelled(dressing), tunnelled(moving));
     println!(
-        "{} frames of {} ({} vertices, {:?} mode, {}) → {}/frames/ and {}/preview.gif; {} unreadable frames skipped",
+        "{} frames of {} ({} vertices, {:?} mode, {}) → {}/frames/ and {}/preview.gif; {} skipped",
         quality.len(),
         stage.garment().name(),
         vertices,
@@ -1052,7 +1055,7 @@ pub fn drape(
         garment.material,
         out.display(),
         out.display(),
-        skipped.len()
+        counted(skipped.len(), "unreadable frame", "unreadable frames")
     );
     for s in &skipped {
         println!("  skipped: {s}");
@@ -1282,10 +1285,10 @@ pub fn live(
         println!("{}", take.recorded_line(&path));
     }
     println!(
-        "{} frames shown, {} camera frames dropped (the pipeline was behind), {} corrupt frames skipped",
-        summary.frames,
-        summary.dropped,
-        summary.skipped.len()
+        "{} shown, {} dropped (the pipeline was behind), {} skipped",
+        counted(summary.frames as usize, "frame", "frames"),
+        counted(summary.dropped as usize, "camera frame", "camera frames"),
+        counted(summary.skipped.len(), "corrupt frame", "corrupt frames")
     );
     print!("{}", timings.summary());
     if let Some(e) = failure {
