@@ -44,3 +44,15 @@ pub fn ensure_mask_dir(option: &str, dir: Option<&std::path::PathBuf>) -> anyhow
         _ => Ok(()),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::counted;
+
+    #[test]
+    fn a_count_of_one_takes_the_singular_and_any_other_the_plural() {
+        assert_eq!(counted(1, "frame", "frames"), "1 frame");
+        assert_eq!(counted(0, "frame", "frames"), "0 frames");
+        assert_eq!(counted(2, "root glitch", "root glitches"), "2 root glitches");
+    }
+}
