@@ -53,6 +53,9 @@ mod tests {
     fn a_count_of_one_takes_the_singular_and_any_other_the_plural() {
         assert_eq!(counted(1, "frame", "frames"), "1 frame");
         assert_eq!(counted(0, "frame", "frames"), "0 frames");
-        assert_eq!(counted(2, "root glitch", "root glitches"), "2 root glitches");
+        assert_eq!(
+            counted(2, "root glitch", "root glitches"),
+            "2 root glitches"
+        );
     }
 }

@@ -905,52 +905,122 @@ impl Segmenter {
         let mut labels = result.labels;
 
         let started = Instant::now();
-        // The suit is where its pattern is: cut pixels far from any pixel of the pattern are not it
-        // (a yellow-green or orange region next to the suit that the smoothness pulled in). This is
-        // `features::suit_support` on the cut's pixels only, with the looser seeds of
-        // `features::is_near_pattern`: a 3-4 chamfer distance of at most 3 · SUIT_RADIUS = 6 is
-        // one of these 13 offsets.
-        {
-            let seed = |j: usize| is_near_pattern(&self.features, &self.gate, j);
-            const NEAR: [(isize, isize); 13] = [
-                (0, 0),
-                (-1, 0),
-                (1, 0),
-                (0, -1),
-                (0, 1),
-                (-1, -1),
-                (1, -1),
-                (-1, 1),
-                (1, 1),
-                (-2, 0),
-                (2, 0),
-                (0, -2),
-                (0, 2),
-            ];
-            debug_assert_eq!(super::features::SUIT_RADIUS, 2);
-            if let Some(b) = PixelBox::around(&labels, w, h, 0) {
-                for y in b.y0..b.y1 {
-                    for x in b.x0..b.x1 {
-                        let i = y * w + x;
-                        if labels[i] {
-                            labels[i] = NEAR.iter().any(|&(dx, dy)| {
-                                let (nx, ny) = (x as isize + dx, y as isize + dy);
-                                nx >= 0
-                                    && ny >= 0
-                                    && (nx as usize) < w
-                                    && (ny as usize) < h
-                                    && seed(ny as usize * w + nx as usize)
-                            });
-                        }
+        self.keep_near_pattern(&mut labels, w, h);
+        let max_hole = (self.options.max_hole_fraction * (w * h) as f32) as usize;
+        let mut ids = std::mem::take(&mut self.ids);
+        let mut crop = std::mem::take(&mut self.crop);
+        let mut report = self.clean_cut(&mut labels, (w, h), max_hole, (&mut crop, &mut ids));
+        // The suit alone: its box (to the frame for the body size) and its rows (the part limits').
+        let suit_bounds = bounding_box_of(&labels, w);
+        // The suit's rows: the hands lie within them, the head and the shoes above and below.
+        let suit_rows = suit_bounds.map_or(0..0, |(_, y0, _, y1)| y0.min(h)..y1.min(h));
+        let suit_box = suit_bounds.map(|(x0, y0, x1, y1)| {
+            let to_frame = |v: usize, limit: u32| ((v * factor as usize) as u32).min(limit);
+            let (fw, fh) = (frame.width(), frame.height());
+            (
+                to_frame(x0, fw),
+                to_frame(y0, fh),
+                to_frame(x1, fw),
+                to_frame(y1, fh),
+            )
+        });
+        let person = self.attach_person_parts(
+            &labels,
+            (w, h),
+            suit_rows,
+            max_hole,
+            &mut report,
+            (&mut crop, &mut ids),
+        );
+        self.ids = ids;
+        self.crop = crop;
+        times.cleanup = ms(started);
+
+        let started = Instant::now();
+        let mut mask = self.refine(frame, &person, w, h);
+        snap_to_colour_edges(frame, &mut mask, self.options.snap, |rgb| {
+            self.gate.marker_index(self.lut.get(rgb))
+        });
+        if let Some(unmixing) = self.options.unmix {
+            unmix_outline(frame, &mut mask, unmixing);
+        }
+        self.fill_mask_suit_holes(frame, &mut mask, &mut report);
+        times.refine = ms(started);
+
+        // History for the next frame.
+        let started = Instant::now();
+        self.adapt_background(&person);
+        self.before_previous_mask = self.previous_mask.take();
+        self.previous_mask = Some(labels);
+        std::mem::swap(
+            self.previous.get_or_insert_with(FrameFeatures::default),
+            &mut self.features,
+        );
+        times.history = ms(started);
+        Segmentation {
+            mask,
+            suit_box,
+            cleanup: report,
+            flow: result.flow,
+            times,
+            passes: 1,
+        }
+    }
+
+    /// The suit is where its pattern is: takes out of the cut `labels` the pixels far from any
+    /// pixel of the pattern (a yellow-green or orange region next to the suit that the smoothness
+    /// pulled in). This is `features::suit_support` on the cut's pixels only, with the looser
+    /// seeds of `features::is_near_pattern`: a 3-4 chamfer distance of at most 3 · SUIT_RADIUS = 6
+    /// is one of these 13 offsets.
+    fn keep_near_pattern(&self, labels: &mut [bool], w: usize, h: usize) {
+        let seed = |j: usize| is_near_pattern(&self.features, &self.gate, j);
+        const NEAR: [(isize, isize); 13] = [
+            (0, 0),
+            (-1, 0),
+            (1, 0),
+            (0, -1),
+            (0, 1),
+            (-1, -1),
+            (1, -1),
+            (-1, 1),
+            (1, 1),
+            (-2, 0),
+            (2, 0),
+            (0, -2),
+            (0, 2),
+        ];
+        debug_assert_eq!(super::features::SUIT_RADIUS, 2);
+        if let Some(b) = PixelBox::around(labels, w, h, 0) {
+            for y in b.y0..b.y1 {
+                for x in b.x0..b.x1 {
+                    let i = y * w + x;
+                    if labels[i] {
+                        labels[i] = NEAR.iter().any(|&(dx, dy)| {
+                            let (nx, ny) = (x as isize + dx, y as isize + dy);
+                            nx >= 0
+                                && ny >= 0
+                                && (nx as usize) < w
+                                && (ny as usize) < h
+                                && seed(ny as usize * w + nx as usize)
+                        });
                     }
                 }
             }
         }
+    }
+
+    /// The clean-up of the cut (see [`clean`]): the person's region kept and its small holes
+    /// filled, then the pieces that are not cloth and too large for a marker and the cloth far
+    /// from every marker taken out. Returns what it changed.
+    fn clean_cut(
+        &mut self,
+        labels: &mut [bool],
+        (w, h): (usize, usize),
+        max_hole: usize,
+        (crop, ids): (&mut Vec<bool>, &mut Vec<u32>),
+    ) -> CleanupReport {
         let n = (w * h) as f32;
-        let max_hole = (self.options.max_hole_fraction * n) as usize;
         let (colours, pattern) = (&self.features.colour, &self.features.pattern);
-        let mut ids = std::mem::take(&mut self.ids);
-        let mut crop = std::mem::take(&mut self.crop);
         // Suit cloth next to a marker: what only the suit looks like (a red poster is all marker
         // colour, a lawn all cloth colour, neither has the two interleaved).
         let score = |i: usize| {
@@ -967,41 +1037,32 @@ impl Segmenter {
             min_area: (self.options.min_person_fraction * n).ceil() as usize,
             reach: self.options.piece_reach,
         };
-        let mut report = clean(
-            &mut labels,
-            w,
-            h,
-            Some(&rule),
-            max_hole,
-            &mut crop,
-            &mut ids,
-        );
+        let mut report = clean(labels, w, h, Some(&rule), max_hole, crop, ids);
         // Pieces of the cut that are not cloth and larger than a few markers are background.
         if self.options.off_cloth_max_markers > 0.0 {
-            let side = self.marker_side_share * region_height(&labels, w) as f32;
+            let side = self.marker_side_share * region_height(labels, w) as f32;
             let max_area = (self.options.off_cloth_max_markers * side * side).ceil() as usize;
             let gate = &self.gate;
             (report.off_cloth_pieces, report.off_cloth_pixels) = remove_large_off_cloth(
-                &mut labels,
+                labels,
                 w,
                 h,
                 |i| colours[i].chromatic && !gate.is_cloth(colours[i]),
                 max_area,
-                &mut crop,
-                &mut ids,
+                crop,
+                ids,
             );
         }
         // Cloth farther from every marker than the suit's can be is a cloth-coloured object.
         if self.options.cloth_reach_cm > 0.0 {
             let area = labels.iter().filter(|&&l| l).count() as f32;
-            let height =
-                (region_height(&labels, w) as f32).max((area / STANDING_AREA_SHARE).sqrt());
+            let height = (region_height(labels, w) as f32).max((area / STANDING_AREA_SHARE).sqrt());
             let reach = (self.options.cloth_reach_cm / PERSON_HEIGHT_CM * height).ceil() as usize;
             // A marker the cut left out is a hole up to a marker's size across.
             let hole = (self.marker_side_share * height).ceil() as usize + 1;
             let gate = &self.gate;
             report.far_from_markers_pixels = remove_far_from_markers(
-                &mut labels,
+                labels,
                 w,
                 h,
                 |i| gate.is_marker(colours[i]),
@@ -1009,24 +1070,28 @@ impl Segmenter {
                 &mut self.distance,
             );
         }
-        // The suit alone: its box (to the frame for the body size) and its rows (the part limits').
-        let suit_bounds = bounding_box_of(&labels, w);
-        // The suit's rows: the hands lie within them, the head and the shoes above and below.
-        let suit_rows = suit_bounds.map_or(0..0, |(_, y0, _, y1)| y0.min(h)..y1.min(h));
-        let suit_box = suit_bounds.map(|(x0, y0, x1, y1)| {
-            let to_frame = |v: usize, limit: u32| ((v * factor as usize) as u32).min(limit);
-            let (fw, fh) = (frame.width(), frame.height());
-            (
-                to_frame(x0, fw),
-                to_frame(y0, fh),
-                to_frame(x1, fw),
-                to_frame(y1, fh),
-            )
-        });
+        report
+    }
+
+    /// The head, hands and shoes attached to the cleaned cut `labels` (the suit; `suit_rows` its
+    /// rows): the part bands' pixels that look like a part ([`attach_parts_narrowing`]), again
+    /// without the memory where that took back a head, and a last look where a head or shoes
+    /// are expected and less was found; the parts are remembered for the next frame and their
+    /// colours learned. Returns the person: suit and parts, its small holes filled.
+    fn attach_person_parts(
+        &mut self,
+        labels: &[bool],
+        (w, h): (usize, usize),
+        suit_rows: std::ops::Range<usize>,
+        max_hole: usize,
+        report: &mut CleanupReport,
+        (crop, ids): (&mut Vec<bool>, &mut Vec<u32>),
+    ) -> Vec<bool> {
+        let colours = &self.features.colour;
         // The parts outside the suit: band pixels whose colour is likelier a part than background.
-        let mut person = labels.clone();
+        let mut person = labels.to_vec();
         part_bands(
-            &labels,
+            labels,
             w,
             h,
             (self.options.part_reach, self.options.part_reach_narrow),
@@ -1053,8 +1118,8 @@ impl Segmenter {
         let may_look = part_look > 0.0 && !suit_rows.is_empty();
         let (head_expected, shoes_expected) = if may_look {
             (
-                expected_head(&labels, w, suit_rows.start, px_per_cm, &mut self.head_prior),
-                expected_shoes(&labels, w, suit_rows.end, px_per_cm, &mut self.shoe_prior),
+                expected_head(labels, w, suit_rows.start, px_per_cm, &mut self.head_prior),
+                expected_shoes(labels, w, suit_rows.end, px_per_cm, &mut self.shoe_prior),
             )
         } else {
             (0, 0)
@@ -1106,7 +1171,8 @@ impl Segmenter {
             // The memory can join a head to background beside it into a piece too large for a
             // head, which is then taken back whole: the pieces found without it are added too.
             let (plain_person, plain_part) = &mut self.plain_parts;
-            plain_person.clone_from(&labels);
+            plain_person.clear();
+            plain_person.extend_from_slice(labels);
             attach_parts_narrowing(
                 plain_person,
                 (&self.band, &self.narrow_band),
@@ -1166,22 +1232,21 @@ impl Segmenter {
         }
         self.adapt_part_colours(w, suit_rows);
         if attached.added > 0 {
-            let filled = clean(&mut person, w, h, None, max_hole, &mut crop, &mut ids);
+            let filled = clean(&mut person, w, h, None, max_hole, crop, ids);
             report.holes_filled += filled.holes_filled;
             report.pixels_filled += filled.pixels_filled;
         }
-        self.ids = ids;
-        self.crop = crop;
-        times.cleanup = ms(started);
+        person
+    }
 
-        let started = Instant::now();
-        let mut mask = self.refine(frame, &person, w, h);
-        snap_to_colour_edges(frame, &mut mask, self.options.snap, |rgb| {
-            self.gate.marker_index(self.lut.get(rgb))
-        });
-        if let Some(unmixing) = self.options.unmix {
-            unmix_outline(frame, &mut mask, unmixing);
-        }
+    /// Fills the enclosed holes of the full-resolution `mask` that are small and mostly of the
+    /// suit's colours ([`fill_suit_holes`]; [`SegmenterOptions::suit_hole_markers`]).
+    fn fill_mask_suit_holes(
+        &mut self,
+        frame: &RgbImage,
+        mask: &mut Mask,
+        report: &mut CleanupReport,
+    ) {
         if self.options.suit_hole_markers > 0.0 {
             let height = mask.bounding_box().map_or(0, |(_, y0, _, y1)| y1 - y0) as f32;
             let side = self.marker_side_share * height;
@@ -1200,26 +1265,6 @@ impl Segmenter {
                 &mut self.hole_runs,
                 &mut self.hole_parent,
             );
-        }
-        times.refine = ms(started);
-
-        // History for the next frame.
-        let started = Instant::now();
-        self.adapt_background(&person);
-        self.before_previous_mask = self.previous_mask.take();
-        self.previous_mask = Some(labels);
-        std::mem::swap(
-            self.previous.get_or_insert_with(FrameFeatures::default),
-            &mut self.features,
-        );
-        times.history = ms(started);
-        Segmentation {
-            mask,
-            suit_box,
-            cleanup: report,
-            flow: result.flow,
-            times,
-            passes: 1,
         }
     }
 
