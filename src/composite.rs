@@ -1,17 +1,21 @@
 //! Compositing and debug overlays: the rendered garment blended into the video frame, and the
-//! mask, markers, skeleton and status text drawn over it, all with tiny-skia.
+//! mask, markers, skeleton and status text drawn over it with tiny-skia.
 //!
-//! The frame arrives as RGB; tiny-skia draws on premultiplied RGBA. The frame is opaque, so the
-//! conversion is just adding (and later dropping) an alpha of 255, done row by row into a buffer the
-//! [`Compositor`] keeps, optionally in parallel bands with rayon.
-//!
-//! - [`Compositor::composite`] is the fast path for a frame with only the garment: it converts just
-//!   the layer's rectangle of the frame, blends the [`GarmentLayer`] over it source-over (premultiplied)
-//!   and writes the rectangle back.
+//! - [`Compositor::composite`] is the fast path for a frame with only the garment: it blends the
+//!   [`GarmentLayer`] source-over (premultiplied) straight into the frame's RGB rows under the
+//!   layer's rectangle ([`blend_over`]), optionally in parallel bands with rayon. This one blend is
+//!   written here, not left to tiny-skia: tiny-skia 0.11 draws a pixmap only through its
+//!   floating-point pipeline (its 8-bit pipeline has no gather stage), where three quarters of the
+//!   1.6–1.7 ms this step took at 1280×720 went, while over an opaque frame source-over is one
+//!   multiply-add per channel: 0.16 ms (`cargo bench --bench render`, docs/measurements.md, seventh
+//!   session of 2026-12-07), the same pixels on the quick start.
 //! - [`Compositor::canvas`] converts the whole frame into a [`Canvas`] for the garment plus debug
 //!   overlays — the person mask tinted, markers as small circles, the skeleton as antialiased lines,
 //!   and text lines (timings, "no person", drops, "REC") in a hand-coded 5×7 bitmap font drawn as
 //!   filled rectangles on a dark backdrop — and [`Canvas::finish`] writes it back into an RGB frame.
+//!   tiny-skia draws on premultiplied RGBA; the frame is opaque, so the conversion is just adding
+//!   (and later dropping) an alpha of 255, into a buffer the [`Compositor`] keeps. The canvas blends
+//!   the garment with [`blend_over`] too, so that both paths give the same pixels.
 //!
 //! The result is the frame's RGB pixels, ready for the preview window, PNG frames or the GIF preview
 //! ([`crate::preview`]).
@@ -20,8 +24,7 @@ use glam::Vec2;
 use image::RgbImage;
 use rayon::prelude::*;
 use tiny_skia::{
-    FillRule, LineCap, LineJoin, Paint, PathBuilder, PixmapMut, PixmapPaint, PixmapRef, Rect,
-    Stroke, Transform,
+    FillRule, LineCap, LineJoin, Paint, PathBuilder, PixmapMut, Rect, Stroke, Transform,
 };
 
 use crate::mask::Mask;
@@ -78,6 +81,36 @@ pub fn rgba_to_rgb(rgba: &[u8], rgb: &mut [u8]) {
     }
 }
 
+/// `x / 255` rounded to nearest, exact for `x ≤ 255 · 255`.
+#[inline]
+fn div255(x: u32) -> u32 {
+    let x = x + 128;
+    (x + (x >> 8)) >> 8
+}
+
+/// Blends the premultiplied RGBA pixels of `layer` source-over onto the opaque pixels of `dst`,
+/// whose colour channels are the first three of every `dst_channels` bytes (3 for RGB, 4 for
+/// RGBA, whose alpha stays 255): `dst = src + dst · (255 − α) / 255`, rounded. Blends
+/// `min(layer.len() / 4, dst.len() / dst_channels)` pixels.
+pub fn blend_over(dst: &mut [u8], dst_channels: usize, layer: &[u8]) {
+    for (d, s) in dst
+        .chunks_exact_mut(dst_channels)
+        .zip(layer.chunks_exact(4))
+    {
+        match s[3] {
+            0 => {}
+            255 => d[..3].copy_from_slice(&s[..3]),
+            alpha => {
+                let keep = 255 - alpha as u32;
+                for (d, &s) in d[..3].iter_mut().zip(&s[..3]) {
+                    // A premultiplied channel is at most its alpha, so this stays within 255.
+                    *d = (s as u32 + div255(*d as u32 * keep)).min(255) as u8;
+                }
+            }
+        }
+    }
+}
+
 /// Rows per band when `rows` are split over the rayon pool (all of them when not parallel).
 fn band_rows(rows: usize, parallel: bool) -> usize {
     if parallel {
@@ -120,8 +153,6 @@ impl Default for TextStyle {
 #[derive(Clone, Debug, Default)]
 pub struct Compositor {
     parallel: bool,
-    /// RGBA of the layer's rectangle, for [`Compositor::composite`].
-    region: Vec<u8>,
     /// RGBA of the whole frame, for [`Compositor::canvas`].
     canvas: Vec<u8>,
     mask: Option<tiny_skia::Mask>,
@@ -149,19 +180,20 @@ impl Compositor {
         let stride = frame.width() as usize * 3;
         let (x0, y0) = (rect.x as usize, rect.y as usize);
         let (width, height) = (rect.width as usize, rect.height as usize);
-        self.region.resize(width * height * 4, 0);
         let pixels: &mut [u8] = frame;
         let rows = &mut pixels[y0 * stride..(y0 + height) * stride];
         let band = band_rows(height, self.parallel);
+        let blend_rows = |rows: &mut [u8], layer: &[u8]| {
+            for (row, layer_row) in rows.chunks_mut(stride).zip(layer.chunks(width * 4)) {
+                blend_over(&mut row[x0 * 3..][..width * 3], 3, layer_row);
+            }
+        };
         if band >= height {
-            composite_band(rows, stride, x0, width, &mut self.region, layer.data());
+            blend_rows(rows, layer.data());
         } else {
             rows.par_chunks_mut(band * stride)
-                .zip(self.region.par_chunks_mut(band * width * 4))
                 .zip(layer.data().par_chunks(band * width * 4))
-                .for_each(|((rows, rgba), layer)| {
-                    composite_band(rows, stride, x0, width, rgba, layer)
-                });
+                .for_each(|(rows, layer)| blend_rows(rows, layer));
         }
         Ok(())
     }
@@ -190,44 +222,6 @@ impl Compositor {
             mask: &mut self.mask,
             parallel: self.parallel,
         })
-    }
-}
-
-/// Converts a band of frame rows to RGBA, blends the layer's matching rows over it, converts back.
-fn composite_band(
-    frame_rows: &mut [u8],
-    stride: usize,
-    x0: usize,
-    width: usize,
-    rgba: &mut [u8],
-    layer: &[u8],
-) {
-    let rows = layer.len() / (width * 4);
-    for r in 0..rows {
-        rgb_to_rgba(
-            &frame_rows[r * stride + x0 * 3..][..width * 3],
-            &mut rgba[r * width * 4..][..width * 4],
-        );
-    }
-    let rgba = &mut rgba[..rows * width * 4];
-    if let (Some(mut dst), Some(src)) = (
-        PixmapMut::from_bytes(rgba, width as u32, rows as u32),
-        PixmapRef::from_bytes(layer, width as u32, rows as u32),
-    ) {
-        dst.draw_pixmap(
-            0,
-            0,
-            src,
-            &PixmapPaint::default(),
-            Transform::identity(),
-            None,
-        );
-    }
-    for r in 0..rows {
-        rgba_to_rgb(
-            &rgba[r * width * 4..][..width * 4],
-            &mut frame_rows[r * stride + x0 * 3..][..width * 3],
-        );
     }
 }
 
@@ -260,18 +254,17 @@ impl<'a> Canvas<'a> {
         &mut self.pixmap
     }
 
-    /// Blends the garment layer source-over.
+    /// Blends the garment layer source-over ([`blend_over`]).
     pub fn garment(&mut self, layer: &GarmentLayer) -> Result<(), CompositeError> {
         same_size("the garment layer", layer.frame_size(), self.size())?;
-        if let (Some(rect), Some(src)) = (layer.bounds(), layer.pixmap()) {
-            self.pixmap.draw_pixmap(
-                rect.x as i32,
-                rect.y as i32,
-                src,
-                &PixmapPaint::default(),
-                Transform::identity(),
-                None,
-            );
+        let Some(rect) = layer.bounds() else {
+            return Ok(());
+        };
+        let stride = self.pixmap.width() as usize * 4;
+        let (x0, y0, width) = (rect.x as usize, rect.y as usize, rect.width as usize);
+        let rows = self.pixmap.data_mut()[y0 * stride..].chunks_mut(stride);
+        for (row, layer_row) in rows.zip(layer.data().chunks(width * 4)) {
+            blend_over(&mut row[x0 * 4..][..width * 4], 4, layer_row);
         }
         Ok(())
     }
@@ -612,6 +605,71 @@ mod tests {
         let mut back = [0; 6];
         rgba_to_rgb(&rgba, &mut back);
         assert_eq!(back, rgb);
+    }
+
+    #[test]
+    fn the_blend_is_source_over_rounded_for_every_alpha_and_background() {
+        for alpha in 0..=255u32 {
+            for background in 0..=255u32 {
+                // A premultiplied channel at most its alpha: the largest, the smallest, between.
+                for src in [0, alpha / 3, alpha] {
+                    let layer = [src as u8, 0, 0, alpha as u8];
+                    let mut rgb = [background as u8, background as u8, 0];
+                    let mut rgba = [background as u8, background as u8, 0, 255];
+                    blend_over(&mut rgb, 3, &layer);
+                    blend_over(&mut rgba, 4, &layer);
+                    let keep = background as f64 * (255 - alpha) as f64 / 255.0;
+                    let expected = (src as f64 + keep).round() as u8;
+                    assert_eq!(rgb[0], expected, "α {alpha}, src {src}, dst {background}");
+                    assert_eq!(rgb[1], keep.round() as u8);
+                    assert_eq!(rgba[..3], rgb);
+                    assert_eq!(rgba[3], 255);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bands_one_pass_and_the_canvas_give_the_same_pixels() {
+        // A 7 × 64 layer with every alpha over a 9 × 70 frame: on two or more threads the
+        // parallel compositor splits its rows into bands.
+        let (w, h) = (9, 70);
+        let rect = PixelRect {
+            x: 1,
+            y: 3,
+            width: 7,
+            height: 64,
+        };
+        let rgba: Vec<u8> = (0..7 * 64)
+            .flat_map(|i| {
+                let a = (i * 37 % 256) as u8;
+                [a / 2, a, a / 3, a]
+            })
+            .collect();
+        let layer = GarmentLayer::from_premultiplied(w, h, rect, rgba).expect("fits");
+        let background =
+            RgbImage::from_fn(w, h, |x, y| image::Rgb([(x * 20) as u8, (y * 3) as u8, 77]));
+        let mut results = Vec::new();
+        for parallel in [false, true] {
+            let mut f = background.clone();
+            let mut c = Compositor::new(parallel);
+            c.composite(&mut f, &layer).expect("same size");
+            results.push(f);
+            let mut f = background.clone();
+            let mut canvas = c.canvas(&background).expect("canvas");
+            canvas.garment(&layer).expect("same size");
+            canvas.finish(&mut f).expect("same size");
+            results.push(f);
+        }
+        assert!(results.iter().all(|r| r == &results[0]));
+        // Outside the layer's rectangle nothing changed; a pixel of alpha 255 is the layer's.
+        assert_eq!(results[0].get_pixel(0, 10), background.get_pixel(0, 10));
+        assert_eq!(results[0].get_pixel(4, 68), background.get_pixel(4, 68));
+        let opaque = (0..7 * 64)
+            .find(|i| i * 37 % 256 == 255)
+            .expect("an opaque pixel");
+        let (x, y) = (1 + opaque % 7, 3 + opaque / 7);
+        assert_eq!(results[0].get_pixel(x, y).0, [127, 255, 85]);
     }
 
     #[test]
