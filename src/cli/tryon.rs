@@ -1047,8 +1047,8 @@ pub fn drape(
     let (dressing, moving) = quality.split_at(quality.len().min(1));
     let (dressing, moving) = (tunnelled(dressing), tunnelled(moving));
     println!(
-        "{} frames of {} ({} vertices, {:?} mode, {}) → {}/frames/ and {}/preview.gif; {} skipped",
-        quality.len(),
+        "{} of {} ({} vertices, {:?} mode, {}) → {}/frames/ and {}/preview.gif; {} skipped",
+        counted(quality.len(), "frame", "frames"),
         stage.garment().name(),
         vertices,
         mode,
