@@ -20,7 +20,8 @@ use suitcap::camera::Camera;
 use suitcap::cloth::material::Material;
 use suitcap::pipeline::PosePipeline;
 use suitcap::pose::smoothing::{
-    index_ranges, repair_root_glitches, JointLimits, PoseFilter, SmoothingParams, JOINT_LIMITS_FILE,
+    index_ranges, repair_root_glitches, smooth_backwards, JointLimits, PoseFilter, SmoothingParams,
+    JOINT_LIMITS_FILE,
 };
 use suitcap::preview::{GifPreview, PreviewSettings};
 use suitcap::render::RenderSettings;
@@ -55,9 +56,10 @@ pub struct GarmentArgs {
 /// Options of the pose stage.
 #[derive(Args, Clone, Debug)]
 pub struct PoseArgs {
-    /// Switch off the One-Euro smoothing of the pose, and the filling in of the frames in which the
-    /// whole body turns faster than a person can (in the written take; with `run`, also in the
-    /// poses the garment and the overlays follow).
+    /// Switch off the One-Euro smoothing of the pose (with `run`, also the take's second pass
+    /// backwards on writing), and the filling in of the frames in which the whole body turns
+    /// faster than a person can (in the written take; with `run`, also in the poses the garment
+    /// and the overlays follow).
     #[arg(long)]
     pub no_smoothing: bool,
     /// Switch off the joint limits (SUIT/joint_limits.toml).
@@ -280,6 +282,14 @@ pub struct Take {
     filled_before: Vec<usize>,
     /// The frames filled in over root glitches, before and by the last [`Take::write`].
     glitches: Vec<std::ops::Range<usize>>,
+    /// The pose filter the poses were smoothed with forwards, to smooth a recording's take
+    /// backwards on writing ([`smooth_backwards`]); `None`: written as pushed.
+    backward: Option<PoseFilter>,
+    /// BVH frames with nobody in view (the forward filter started again after them).
+    nobody: Vec<usize>,
+    /// BVH frames filled in for frames of the clock without a pose, to be filled in again from
+    /// the smoothed poses around them.
+    held_slots: Vec<usize>,
 }
 
 /// How long a root glitch may last before the pose it comes back to, seconds
@@ -329,7 +339,24 @@ impl Take {
             repair_glitches: true,
             filled_before: Vec::new(),
             glitches: Vec::new(),
+            backward: None,
+            nobody: Vec::new(),
+            held_slots: Vec::new(),
         })
+    }
+
+    /// The take smoothed backwards on writing with `filter`, the one its poses were smoothed
+    /// with forwards ([`smooth_backwards`]: a recording's take then follows the motion without
+    /// the forward filter's lag); `None`, or a filter that does not smooth: written as pushed.
+    pub fn smoothing_backwards(mut self, filter: Option<PoseFilter>) -> Take {
+        self.backward = filter.filter(PoseFilter::smoothing_enabled);
+        self
+    }
+
+    /// Notes that BVH frame `slot` had nobody in view, so the backward smoothing starts again
+    /// there as the forward one did.
+    pub fn note_nobody(&mut self, slot: u64) {
+        self.nobody.push(slot as usize);
     }
 
     /// The take with the filling in of root glitches on write switched on or off (on by default).
@@ -404,6 +431,8 @@ impl Take {
             self.motion.push_frame(&filled)?;
         }
         self.held += missing as usize;
+        self.held_slots
+            .extend(filled_to as usize..(filled_to + missing) as usize);
         Ok(())
     }
 
@@ -434,11 +463,37 @@ impl Take {
         self.filled_before.push(slot as usize);
     }
 
+    /// Fills the held frames of `values` (the take's frames one after the other) in again between
+    /// the poses around them, as [`Take::fill_until`] did when they were pushed: half-way between
+    /// two poses, the last pose after the end, the first before the start.
+    fn fill_in_again(&self, values: &mut [f32]) {
+        let channels = self.rotation.len();
+        let frames = values.len() / channels.max(1);
+        let mut filled = Vec::with_capacity(channels);
+        for run in index_ranges(self.held_slots.iter().copied()) {
+            let frame = |k: usize| values[k * channels..(k + 1) * channels].to_vec();
+            let (before, next) = match (
+                run.start.checked_sub(1).map(frame),
+                (run.end < frames).then(|| frame(run.end)),
+            ) {
+                (Some(before), Some(next)) => (before, next),
+                (Some(pose), None) | (None, Some(pose)) => (pose.clone(), pose),
+                (None, None) => continue,
+            };
+            for (k, slot) in run.clone().enumerate() {
+                let t = (k + 1) as f32 / (run.len() + 1) as f32;
+                interpolate_frames(&self.rotation, &before, &next, t, &mut filled);
+                values[slot * channels..(slot + 1) * channels].copy_from_slice(&filled);
+            }
+        }
+    }
+
     /// Writes the take (atomically) and returns its path. The file gets the frames in which the
     /// whole body turned faster than a person can filled in between the frames around them
     /// ([`repair_root_glitches`], within [`GLITCH_WINDOW_S`]): a live take's poses come on as
-    /// they were estimated, a `run`'s came filled in already ([`Take::note_glitch_filled`]). The
-    /// take in memory keeps what was pushed.
+    /// they were estimated, a `run`'s came filled in already ([`Take::note_glitch_filled`]).
+    /// A take [`Take::smoothing_backwards`] is then smoothed backwards. The take in memory keeps
+    /// what was pushed.
     pub fn write(&mut self) -> anyhow::Result<PathBuf> {
         let mut values = self.motion.values().to_vec();
         let window = (GLITCH_WINDOW_S * self.fps).round().max(1.0) as usize;
@@ -452,6 +507,15 @@ impl Take {
         } else {
             Vec::new()
         };
+        if let Some(filter) = &mut self.backward {
+            smooth_backwards(
+                filter,
+                &mut values,
+                1.0 / self.fps,
+                (&self.nobody, &self.held_slots),
+            );
+            self.fill_in_again(&mut values);
+        }
         let mut filled = vec![false; self.motion.frame_count()];
         for k in repaired
             .into_iter()
@@ -665,7 +729,8 @@ pub fn run(
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let template = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
     let mut take = Take::new(&template, fps, clock, out.join("take.bvh"), Some(0))?
-        .repairing_glitches(!pose.no_smoothing);
+        .repairing_glitches(!pose.no_smoothing)
+        .smoothing_backwards(pose_stage.filter.clone());
     let mut outputs = RunOutputs::new(out, fps)?;
     let controls = Controls::new(parse_overlays(&garment.overlays)?);
     stop_on_signals(&controls);
@@ -713,6 +778,9 @@ pub fn run(
                 .and_then(|bvh_frame| {
                     if output.pose.root_glitch_filled {
                         take.note_glitch_filled(bvh_frame);
+                    }
+                    if !output.pose.person {
+                        take.note_nobody(bvh_frame);
                     }
                     outputs.add(&output, bvh_frame)
                 });
@@ -1386,10 +1454,10 @@ mod tests {
         take.motion.frames().map(|f| f[0]).collect()
     }
 
-    #[test]
-    fn a_take_fills_in_frame_times_without_a_pose() {
+    /// One joint, the hip, with three position and three rotation channels.
+    fn hip() -> suitcap::skeleton::Skeleton {
         use suitcap::skeleton::{Channel, Joint, Skeleton};
-        let skeleton = Skeleton::new(vec![Joint {
+        Skeleton::new(vec![Joint {
             name: "hip".into(),
             parent: None,
             offset: glam::Vec3::ZERO,
@@ -1404,7 +1472,47 @@ mod tests {
             first_channel: 0,
             end_site: Some(glam::Vec3::Y),
         }])
-        .unwrap();
+        .unwrap()
+    }
+
+    #[test]
+    fn a_recordings_take_is_smoothed_back_and_its_filled_frames_filled_in_again() {
+        // The hip turning steadily at 3° a frame (its Z rotation, channel 3), smoothed forwards
+        // as `run` smooths its poses; input frame 20 never arrived.
+        let skeleton = hip();
+        let mut forward = PoseFilter::new(&skeleton, Some(SmoothingParams::default()), None);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("take.bvh");
+        let mut take = Take::new(&skeleton, 30.0, TakeClock::InputFrames, path, Some(0))
+            .unwrap()
+            .smoothing_backwards(Some(forward.clone()));
+        let mut pushed = Vec::new();
+        for k in (0..40u64).filter(|&k| k != 20) {
+            let mut frame = [0.0, 0.0, 0.0, 3.0 * k as f32, 0.0, 0.0];
+            forward.apply(k as f64 / 30.0, &mut frame);
+            pushed.push(frame[3]);
+            take.push(k, k as f64 / 30.0, &frame).unwrap();
+        }
+        let written: Vec<f32> = Motion::load(&take.write().unwrap())
+            .unwrap()
+            .frames()
+            .map(|f| f[3])
+            .collect();
+        // Frame 10: the forward pass lags behind the turn, the written take does not.
+        let lag_forward = 30.0 - pushed[10];
+        assert!(lag_forward > 0.5, "{lag_forward}");
+        assert!(
+            (written[10] - 30.0).abs() < lag_forward / 4.0,
+            "{}",
+            written[10]
+        );
+        // Frame 20 lies half-way between the smoothed frames around it (six decimals in the file).
+        assert!((written[20] - (written[19] + written[21]) / 2.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn a_take_fills_in_frame_times_without_a_pose() {
+        let skeleton = hip();
         let frame = |k: u64| [k as f32; 6];
         let take_on = |clock, first_index| {
             Take::new(

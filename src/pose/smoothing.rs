@@ -23,6 +23,9 @@
 //! * [`PoseFilter`]: both, per BVH channel of one skeleton, each switchable (`Option`) and resettable
 //!   ([`PoseFilter::reset`], e.g. on tracking loss, so the filter does not glide from a stale pose).
 //!   Each frame is clamped, smoothed, and clamped again; it hands the frame back in place.
+//! * [`smooth_backwards`], for a recorded take before it is written: the frames, smoothed forwards
+//!   as they were estimated, smoothed once more from the last to the first, which undoes the
+//!   forward pass's lag (a zero-phase, forward–backward filter, which only a recording can have).
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -754,10 +757,98 @@ impl PoseFilter {
     }
 }
 
+/// Smooths a recorded take once more, backwards in time, with `filter`: the filter the frames were
+/// smoothed with forwards as they were estimated (it is reset first, and clamps to its limits as
+/// it goes). The forward pass lags behind a moving joint; the backward pass lags the other way,
+/// so together they follow it without lag, as a zero-phase (forward–backward) filter does.
+/// `values` holds the frames one after the other, `frame_time_s` apart. The frames listed in
+/// `breaks` (nobody in view, where the forward filter started again) are left as they are and
+/// start the filter again; those listed in `skipped` (frames filled in between poses, to be
+/// filled in again from the smoothed ones) are left as they are, the filter's clock running on
+/// over them. Does nothing when the filter does not smooth or the frames are not of its length.
+pub fn smooth_backwards(
+    filter: &mut PoseFilter,
+    values: &mut [f32],
+    frame_time_s: f64,
+    (breaks, skipped): (&[usize], &[usize]),
+) {
+    if !filter.smoothing_enabled()
+        || filter.channels == 0
+        || !values.len().is_multiple_of(filter.channels)
+    {
+        return;
+    }
+    filter.reset();
+    let frames = values.len() / filter.channels;
+    for (k, frame) in values.chunks_exact_mut(filter.channels).enumerate().rev() {
+        if breaks.contains(&k) {
+            filter.reset();
+        } else if !skipped.contains(&k) {
+            filter.apply((frames - 1 - k) as f64 * frame_time_s, frame);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::skeleton::tests::two_joint_arm;
+
+    #[test]
+    fn smoothing_back_undoes_the_forward_lag_of_a_steady_turn() {
+        // The elbow turning at 3° a frame (90°/s) for two seconds, the root still.
+        let truth: Vec<f32> = turning(&[0.0; 60]);
+        let mut filter = PoseFilter::new(&two_joint_arm(), Some(SmoothingParams::default()), None);
+        let mut values = truth.clone();
+        for (k, frame) in values.chunks_exact_mut(9).enumerate() {
+            for v in &mut frame[6..] {
+                *v *= 3.0;
+            }
+            filter.apply(k as f64 * DT, frame);
+        }
+        let forward = values.clone();
+        smooth_backwards(&mut filter, &mut values, DT, (&[], &[]));
+        // Frame 30, well inside: the forward pass lags behind the turn; forward and back do not.
+        let at = |v: &[f32]| v[30 * 9 + 6];
+        let lag_forward = 90.0 - at(&forward);
+        let lag_both = (90.0 - at(&values)).abs();
+        assert!(lag_forward > 0.5, "the forward pass lags: {lag_forward}");
+        assert!(
+            lag_both < lag_forward / 4.0,
+            "{lag_both} against {lag_forward}"
+        );
+    }
+
+    #[test]
+    fn smoothing_back_leaves_breaks_and_constant_frames_alone() {
+        let mut filter = PoseFilter::new(&two_joint_arm(), Some(SmoothingParams::default()), None);
+        // Ten frames of the root turned 20°, the elbow at its frame index; frames 3 and 4 are
+        // breaks with values of their own.
+        let mut values = turning(&[20.0; 10]);
+        for frame in values.chunks_exact_mut(9) {
+            frame[6] = 5.0;
+        }
+        values[3 * 9 + 6] = -40.0;
+        values[4 * 9 + 6] = 77.0;
+        let before = values.clone();
+        smooth_backwards(&mut filter, &mut values, DT, (&[3, 4], &[]));
+        for (a, b) in values.iter().zip(&before) {
+            assert!((a - b).abs() < 1e-4, "{a} against {b}");
+        }
+        // A skipped frame is left alone too, and the filter goes on over it.
+        let mut turn = turning(&[0.0; 12]);
+        turn[5 * 9 + 6] = 500.0;
+        let mut filter = PoseFilter::new(&two_joint_arm(), Some(SmoothingParams::default()), None);
+        smooth_backwards(&mut filter, &mut turn, DT, (&[], &[5]));
+        assert_eq!(turn[5 * 9 + 6], 500.0);
+        assert!(turn[4 * 9 + 6] < 6.0, "{}", turn[4 * 9 + 6]);
+        // Without smoothing nothing is done at all.
+        let mut limits_only = PoseFilter::new(&two_joint_arm(), None, None);
+        let mut ramp = turning(&[0.0, 10.0, 20.0]);
+        let unchanged = ramp.clone();
+        smooth_backwards(&mut limits_only, &mut ramp, DT, (&[], &[]));
+        assert_eq!(ramp, unchanged);
+    }
 
     const DT: f64 = 1.0 / 30.0;
 

@@ -1335,6 +1335,9 @@ struct DatasetRun {
     positions: PositionErrors,
     /// The raw regression through each of the runtime's filters, in [`FILTER_VARIANTS`]' order.
     filtered: Vec<JointErrors>,
+    /// With smoothing and limits as a recording's take is written: smoothed forwards as estimated,
+    /// then backwards (`smooth_backwards`); `None` when smoothing is not among the variants.
+    recorded: Option<JointErrors>,
     frames: Vec<FrameError>,
     /// Root position error sums (cm) before and after the position correction, frames, and
     /// frames the correction moved.
@@ -1399,6 +1402,7 @@ fn evaluate(
         .iter()
         .map(|_| JointErrors::new(names.clone()))
         .collect();
+    let mut recorded: Option<JointErrors> = None;
     let (mut root, mut root_pixels, mut marker_depth_frames) = ((0.0, 0.0, 0, 0), (0.0, 0.0, 0), 0);
     let (mut depth_ratios_all, mut depth_ratio_medians) = (Vec::new(), Vec::new());
     let (mut per_dataset, mut per_frame) = (Vec::new(), Vec::new());
@@ -1410,6 +1414,11 @@ fn evaluate(
         all_positions.merge(&run.positions);
         for (sum, errors) in filtered.iter_mut().zip(&run.filtered) {
             sum.merge(errors);
+        }
+        if let Some(errors) = &run.recorded {
+            recorded
+                .get_or_insert_with(|| JointErrors::new(names.clone()))
+                .merge(errors);
         }
         root = (
             root.0 + run.root.0,
@@ -1441,6 +1450,18 @@ fn evaluate(
         );
         for ((label, _, _), errors) in variants.iter().zip(&filtered) {
             println!("  with {label}: {:.2}° (Euler)", errors.mean_euler());
+        }
+        if let Some(errors) = &recorded {
+            println!(
+                "  with {}, then smoothed back as `run` writes a recording's take: {:.2}° (Euler), {:.2}° (geodesic)",
+                variants
+                    .iter()
+                    .rev()
+                    .find(|&&(_, smooth, _)| smooth)
+                    .map_or("smoothing", |v| v.0),
+                errors.mean_euler(),
+                errors.mean_geodesic()
+            );
         }
         if limits.is_none() {
             println!(
@@ -1494,7 +1515,7 @@ fn evaluate_dataset(
     limits: Option<&suitcap::pose::smoothing::JointLimits>,
     variants: &[(&str, bool, bool)],
 ) -> anyhow::Result<DatasetRun> {
-    use suitcap::pose::smoothing::{PoseFilter, SmoothingParams};
+    use suitcap::pose::smoothing::{smooth_backwards, PoseFilter, SmoothingParams};
     let mut pipeline = PosePipeline::load(suit_dir)?;
     let names = pipeline.suit.skeleton.joint_names();
     let dataset = Dataset::open(dir)?;
@@ -1507,6 +1528,7 @@ fn evaluate_dataset(
             .iter()
             .map(|_| JointErrors::new(names.clone()))
             .collect(),
+        recorded: None,
         frames: Vec::with_capacity(dataset.frame_count()),
         root: (0.0, 0.0, 0, 0),
         marker_depth_frames: 0,
@@ -1527,6 +1549,10 @@ fn evaluate_dataset(
         })
         .collect();
     let frame_time = dataset.motion.frame_time;
+    // The variant `run` uses (the last that smooths, with limits where there are any), whose
+    // frames are kept to be smoothed back as a recording's take is.
+    let recorded_variant = variants.iter().rposition(|&(_, smooth, _)| smooth);
+    let (mut take, mut nobody) = (Vec::new(), Vec::new());
     let root_of = |values: &[f32]| {
         glam::Vec3::from_array(layout.root_position.map(|c| values[c]))
             + dataset.motion.skeleton.joint(0).offset
@@ -1553,6 +1579,8 @@ fn evaluate_dataset(
         if !result.person {
             missed += 1;
             filters.iter_mut().for_each(PoseFilter::reset);
+            take.extend_from_slice(&result.frame);
+            nobody.push(index);
             run.frames.push(record);
             continue;
         }
@@ -1570,10 +1598,13 @@ fn evaluate_dataset(
         );
         run.positions.merge(&this_positions);
         record.position_cm = Some(this_positions.mean_cm());
-        for (filter, errors) in filters.iter_mut().zip(run.filtered.iter_mut()) {
+        for (k, (filter, errors)) in filters.iter_mut().zip(run.filtered.iter_mut()).enumerate() {
             let mut filtered = result.frame.clone();
             filter.apply(index as f64 * frame_time, &mut filtered);
             errors.add(&layout, truth_frame, &filtered);
+            if Some(k) == recorded_variant {
+                take.extend_from_slice(&filtered);
+            }
         }
         // The regressor's skeleton is one subject's; compare root positions in the world frame.
         let truth_root = root_of(truth_frame);
@@ -1601,6 +1632,18 @@ fn evaluate_dataset(
         run.root.3 += result.correction.is_some() as usize;
         run.marker_depth_frames += result.marker_depth_cm.is_some() as usize;
         run.frames.push(record);
+    }
+    if let Some(k) = recorded_variant {
+        let mut filter = filters[k].clone();
+        smooth_backwards(&mut filter, &mut take, frame_time, (&nobody, &[]));
+        let mut errors = JointErrors::new(names.clone());
+        let channels = take.len() / dataset.frame_count().max(1);
+        for (index, frame) in take.chunks_exact(channels.max(1)).enumerate() {
+            if !nobody.contains(&index) {
+                errors.add(&layout, dataset.motion.frame(index), frame);
+            }
+        }
+        run.recorded = Some(errors);
     }
     let worst = worst_frame(&run.frames).map_or(String::new(), |(k, e)| {
         format!("; worst frame {k} ({e:.2}°)")
