@@ -780,11 +780,22 @@ pub fn smooth_backwards(
     }
     filter.reset();
     let frames = values.len() / filter.channels;
+    // Per frame: 0 smoothed, 1 skipped, 2 a break (a long take may have many of either).
+    let mut kind = vec![0u8; frames];
+    for (&k, mark) in skipped
+        .iter()
+        .map(|k| (k, 1))
+        .chain(breaks.iter().map(|k| (k, 2)))
+    {
+        if let Some(slot) = kind.get_mut(k) {
+            *slot = (*slot).max(mark);
+        }
+    }
     for (k, frame) in values.chunks_exact_mut(filter.channels).enumerate().rev() {
-        if breaks.contains(&k) {
-            filter.reset();
-        } else if !skipped.contains(&k) {
-            filter.apply((frames - 1 - k) as f64 * frame_time_s, frame);
+        match kind[k] {
+            0 => filter.apply((frames - 1 - k) as f64 * frame_time_s, frame),
+            1 => {}
+            _ => filter.reset(),
         }
     }
 }
