@@ -56,8 +56,8 @@ pub struct GarmentArgs {
 /// Options of the pose stage.
 #[derive(Args, Clone, Debug)]
 pub struct PoseArgs {
-    /// Switch off the One-Euro smoothing of the pose (with `run`, also the take's second pass
-    /// backwards on writing), and the filling in of the frames in which the whole body turns
+    /// Switch off the One-Euro smoothing of the pose (and the take's second pass backwards on
+    /// writing), and the filling in of the frames in which the whole body turns
     /// faster than a person can (in the written take; with `run`, also in the poses the garment
     /// and the overlays follow).
     #[arg(long)]
@@ -1217,6 +1217,8 @@ pub fn live(
     let base = record.cloned().unwrap_or_else(|| PathBuf::from("take.bvh"));
     let mut takes_written: Vec<(PathBuf, usize)> = Vec::new();
     let template_pipeline_skeleton = pose_stage.pipeline.regressor.skeleton.skeleton.clone();
+    // Each take is smoothed back on writing with the filter its poses were smoothed with.
+    let take_filter = pose_stage.filter.clone();
     let mut recording: Option<Take> = match record {
         Some(path) => Some(
             Take::new(
@@ -1226,7 +1228,8 @@ pub fn live(
                 path.clone(),
                 Some(0),
             )?
-            .repairing_glitches(!pose.no_smoothing),
+            .repairing_glitches(!pose.no_smoothing)
+            .smoothing_backwards(take_filter.clone()),
         ),
         None => None,
     };
@@ -1276,9 +1279,13 @@ pub fn live(
                 eprintln!("{line}");
             }
             if let Some(take) = &mut recording {
-                if let Err(e) = take.push(output.index, output.timestamp_s, &output.pose.frame) {
-                    failure = Some(e);
-                    return false;
+                match take.push(output.index, output.timestamp_s, &output.pose.frame) {
+                    Ok(slot) if !output.pose.person => take.note_nobody(slot),
+                    Ok(_) => {}
+                    Err(e) => {
+                        failure = Some(e);
+                        return false;
+                    }
                 }
             }
             buffer.clear();
@@ -1327,7 +1334,10 @@ pub fn live(
                                 None,
                             ) {
                                 Ok(take) => {
-                                    recording = Some(take.repairing_glitches(!pose.no_smoothing))
+                                    recording = Some(
+                                        take.repairing_glitches(!pose.no_smoothing)
+                                            .smoothing_backwards(take_filter.clone()),
+                                    )
                                 }
                                 Err(e) => eprintln!(
                                     "cannot start recording: {}",
