@@ -273,8 +273,6 @@ pub struct Take {
     first: Option<Placed>,
     /// The last pose pushed.
     last: Option<Placed>,
-    /// BVH frames filled in for frames of the clock without a pose.
-    held: usize,
     /// Whether [`Take::write`] fills in root glitches.
     repair_glitches: bool,
     /// BVH frames whose poses came already filled in over a root glitch (the runner's
@@ -287,9 +285,28 @@ pub struct Take {
     backward: Option<PoseFilter>,
     /// BVH frames with nobody in view (the forward filter started again after them).
     nobody: Vec<usize>,
-    /// BVH frames filled in for frames of the clock without a pose, to be filled in again from
-    /// the smoothed poses around them.
+    /// BVH frames filled in for frames of the clock without a pose (filled in again from the
+    /// smoothed poses around them when the take is smoothed back).
     held_slots: Vec<usize>,
+}
+
+/// The `count` frames between `before` and `next` at even steps, one after the other into `out`
+/// (cleared): what [`Take`] fills in for frames of the clock without a pose, rotations the short
+/// way ([`interpolate_frames`]).
+fn frames_between(
+    rotation: &[bool],
+    before: &[f32],
+    next: &[f32],
+    count: usize,
+    out: &mut Vec<f32>,
+) {
+    out.clear();
+    let mut frame = Vec::with_capacity(before.len());
+    for k in 1..=count {
+        let t = k as f32 / (count + 1) as f32;
+        interpolate_frames(rotation, before, next, t, &mut frame);
+        out.extend_from_slice(&frame);
+    }
 }
 
 /// How long a root glitch may last before the pose it comes back to, seconds
@@ -335,7 +352,6 @@ impl Take {
             first_index,
             first: None,
             last: None,
-            held: 0,
             repair_glitches: true,
             filled_before: Vec::new(),
             glitches: Vec::new(),
@@ -424,13 +440,11 @@ impl Take {
             0 => next.to_vec(),
             n => self.motion.frame(n - 1).to_vec(),
         };
-        let mut filled = Vec::with_capacity(before.len());
-        for k in 1..=missing {
-            let t = k as f32 / (missing + 1) as f32;
-            interpolate_frames(&self.rotation, &before, next, t, &mut filled);
-            self.motion.push_frame(&filled)?;
+        let mut filled = Vec::new();
+        frames_between(&self.rotation, &before, next, missing as usize, &mut filled);
+        for frame in filled.chunks_exact(before.len().max(1)) {
+            self.motion.push_frame(frame)?;
         }
-        self.held += missing as usize;
         self.held_slots
             .extend(filled_to as usize..(filled_to + missing) as usize);
         Ok(())
@@ -442,7 +456,7 @@ impl Take {
 
     /// BVH frames filled in for frames of the clock without a pose.
     pub fn held(&self) -> usize {
-        self.held
+        self.held_slots.len()
     }
 
     /// "recorded N frames → PATH", with the frames held over input that never reached the pose
@@ -452,7 +466,7 @@ impl Take {
             "recorded {} frames → {} ({} of them filled in between the poses around them, for frames that were corrupt or that the pipeline or the camera dropped, so the take keeps the camera's time{})",
             self.frames(),
             path.display(),
-            self.held,
+            self.held(),
             self.glitches_clause()
         )
     }
@@ -480,11 +494,8 @@ impl Take {
                 (Some(pose), None) | (None, Some(pose)) => (pose.clone(), pose),
                 (None, None) => continue,
             };
-            for (k, slot) in run.clone().enumerate() {
-                let t = (k + 1) as f32 / (run.len() + 1) as f32;
-                interpolate_frames(&self.rotation, &before, &next, t, &mut filled);
-                values[slot * channels..(slot + 1) * channels].copy_from_slice(&filled);
-            }
+            frames_between(&self.rotation, &before, &next, run.len(), &mut filled);
+            values[run.start * channels..run.end * channels].copy_from_slice(&filled);
         }
     }
 

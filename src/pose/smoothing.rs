@@ -808,9 +808,8 @@ mod tests {
     #[test]
     fn smoothing_back_undoes_the_forward_lag_of_a_steady_turn() {
         // The elbow turning at 3° a frame (90°/s) for two seconds, the root still.
-        let truth: Vec<f32> = turning(&[0.0; 60]);
         let mut filter = PoseFilter::new(&two_joint_arm(), Some(SmoothingParams::default()), None);
-        let mut values = truth.clone();
+        let mut values = turning(&[0.0; 60]);
         for (k, frame) in values.chunks_exact_mut(9).enumerate() {
             for v in &mut frame[6..] {
                 *v *= 3.0;
@@ -833,8 +832,8 @@ mod tests {
     #[test]
     fn smoothing_back_leaves_breaks_and_constant_frames_alone() {
         let mut filter = PoseFilter::new(&two_joint_arm(), Some(SmoothingParams::default()), None);
-        // Ten frames of the root turned 20°, the elbow at its frame index; frames 3 and 4 are
-        // breaks with values of their own.
+        // Ten frames of the root turned 20° and the elbow bent 5°; frames 3 and 4 are breaks
+        // with elbows of their own.
         let mut values = turning(&[20.0; 10]);
         for frame in values.chunks_exact_mut(9) {
             frame[6] = 5.0;

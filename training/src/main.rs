@@ -1359,6 +1359,12 @@ const FILTER_VARIANTS: [(&str, bool, bool); 3] = [
     ("smoothing + limits", true, true),
 ];
 
+/// The filter variant a recording's take is smoothed with (forwards, then back on writing): the
+/// last of `variants` that smooths, with limits where there are any, as `run` uses them.
+fn recorded_variant(variants: &[(&str, bool, bool)]) -> Option<usize> {
+    variants.iter().rposition(|&(_, smooth, _)| smooth)
+}
+
 /// Runs a trained suit over datasets with ground truth and accumulates the joint errors. The
 /// datasets are independent streams, each with a pipeline of its own, so they run in parallel.
 fn evaluate(
@@ -1454,11 +1460,7 @@ fn evaluate(
         if let Some(errors) = &recorded {
             println!(
                 "  with {}, then smoothed back as `run` writes a recording's take: {:.2}° (Euler), {:.2}° (geodesic)",
-                variants
-                    .iter()
-                    .rev()
-                    .find(|&&(_, smooth, _)| smooth)
-                    .map_or("smoothing", |v| v.0),
+                recorded_variant(&variants).map_or("smoothing", |k| variants[k].0),
                 errors.mean_euler(),
                 errors.mean_geodesic()
             );
@@ -1549,9 +1551,8 @@ fn evaluate_dataset(
         })
         .collect();
     let frame_time = dataset.motion.frame_time;
-    // The variant `run` uses (the last that smooths, with limits where there are any), whose
-    // frames are kept to be smoothed back as a recording's take is.
-    let recorded_variant = variants.iter().rposition(|&(_, smooth, _)| smooth);
+    // The frames of the variant `run` uses, kept to be smoothed back as a recording's take is.
+    let recorded_variant = recorded_variant(variants);
     let (mut take, mut nobody) = (Vec::new(), Vec::new());
     let root_of = |values: &[f32]| {
         glam::Vec3::from_array(layout.root_position.map(|c| values[c]))
