@@ -162,7 +162,11 @@ fn eval_writes_the_per_joint_table_and_its_bar_chart() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let data = generated_clip(&tmp.path().join("clip"));
     let train = Path::new(env!("CARGO_BIN_EXE_suitcap")).with_file_name("suitcap-train");
-    let (csv, chart) = (tmp.path().join("joints.csv"), tmp.path().join("joints.png"));
+    let (csv, chart, json) = (
+        tmp.path().join("joints.csv"),
+        tmp.path().join("joints.png"),
+        tmp.path().join("eval.json"),
+    );
     let table = succeeded(
         Command::new(&train)
             .args([
@@ -176,6 +180,8 @@ fn eval_writes_the_per_joint_table_and_its_bar_chart() {
             .arg(&csv)
             .arg("--chart")
             .arg(&chart)
+            .arg("--json")
+            .arg(&json)
             .output()
             .expect("runs (the test command builds the workspace first)"),
     );
@@ -213,6 +219,45 @@ fn eval_writes_the_per_joint_table_and_its_bar_chart() {
     assert!(image.width() > 600 && image.height() > 400);
     // The Euler series' blue is drawn somewhere.
     assert!(image.pixels().any(|p| p.0 == [0x1f, 0x77, 0xb4]));
+    // The JSON holds the figures the console printed: the means, a row per joint, and the take
+    // as `run` writes it (the shipped suit has joint limits, so `run`'s filter is among those
+    // evaluated).
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("the JSON")).expect("JSON");
+    assert_eq!(report["masks"], "segmenter");
+    assert_eq!(report["frames"], 12);
+    let degrees = |value: &serde_json::Value| format!("{:.2}°", value.as_f64().expect("a number"));
+    let mean = printed.last().expect("the mean row");
+    assert!(
+        mean.contains(&degrees(&report["mean_euler_deg"]).replace('°', "")),
+        "{mean} / {report}"
+    );
+    assert_eq!(
+        report["joints"].as_array().map(Vec::len),
+        Some(printed.len() - 1)
+    );
+    assert!(report["joints"][0]["position_cm"].is_null(), "{report}");
+    let take = &report["recorded_take"];
+    let line = table
+        .lines()
+        .find(|l| l.contains("then smoothed back as `run` writes"))
+        .expect("the take's line");
+    assert!(
+        line.contains(&format!("{} (Euler)", degrees(&take["mean_euler_deg"]))),
+        "{line} / {take}"
+    );
+    let filtered = report["filtered"].as_array().expect("the filters");
+    assert!(!filtered.is_empty(), "{report}");
+    for variant in filtered {
+        let label = variant["variant"].as_str().expect("a name");
+        assert!(
+            table.contains(&format!(
+                "  with {label}: {} (Euler)",
+                degrees(&variant["mean_euler_deg"])
+            )),
+            "{label} / {table}"
+        );
+    }
 }
 
 /// A suit directory `dir/suit` holding the shipped suit's definition and `models` (no manifest).

@@ -1243,6 +1243,12 @@ struct Evaluation {
     positions: PositionErrors,
     datasets: Vec<DatasetErrors>,
     frames: Vec<FrameError>,
+    /// The raw regression through each filter of [`FILTER_VARIANTS`] (those the suit allows),
+    /// named as printed.
+    filtered: Vec<(String, JointErrors)>,
+    /// The filter `run` uses, then smoothed back as a recording's take is written, named by that
+    /// filter (`None` when no variant is `run`'s).
+    recorded: Option<(String, JointErrors)>,
 }
 
 /// One evaluated frame: its mean joint-angle errors and the root's error, `None` where nobody
@@ -1449,6 +1455,10 @@ fn evaluate(
         });
         per_frame.extend(run.frames);
     }
+    let recorded = recorded.map(|errors| {
+        let label = recorded_variant(&variants).map_or("smoothing", |k| variants[k].0);
+        (label.to_owned(), errors)
+    });
     if verbose {
         println!(
             "mean joint angle error of the raw regression: {:.2}° (Euler)",
@@ -1457,10 +1467,9 @@ fn evaluate(
         for ((label, _, _), errors) in variants.iter().zip(&filtered) {
             println!("  with {label}: {:.2}° (Euler)", errors.mean_euler());
         }
-        if let Some(errors) = &recorded {
+        if let Some((label, errors)) = &recorded {
             println!(
-                "  with {}, then smoothed back as `run` writes a recording's take: {:.2}° (Euler), {:.2}° (geodesic)",
-                recorded_variant(&variants).map_or("smoothing", |k| variants[k].0),
+                "  with {label}, then smoothed back as `run` writes a recording's take: {:.2}° (Euler), {:.2}° (geodesic)",
                 errors.mean_euler(),
                 errors.mean_geodesic()
             );
@@ -1504,6 +1513,12 @@ fn evaluate(
         positions: all_positions,
         datasets: per_dataset,
         frames: per_frame,
+        filtered: variants
+            .iter()
+            .map(|&(label, _, _)| label.to_owned())
+            .zip(filtered)
+            .collect(),
+        recorded,
     })
 }
 
@@ -1663,6 +1678,102 @@ fn evaluate_dataset(
     Ok(run)
 }
 
+/// What `suitcap-train eval --json` writes: the figures the console table prints.
+#[derive(serde::Serialize)]
+struct EvalReport<'a> {
+    /// "segmenter" or "ground truth".
+    masks: &'static str,
+    frames: usize,
+    /// The raw regression's errors over every frame.
+    mean_euler_deg: f64,
+    mean_geodesic_deg: f64,
+    mean_position_cm: f64,
+    /// The raw regression through each pose filter, as `run` and `live` can run it.
+    filtered: Vec<FilteredErrors<'a>>,
+    /// As `run` writes a recording's take: its filter, then smoothed back (`null` without it).
+    recorded_take: Option<FilteredErrors<'a>>,
+    datasets: Vec<DatasetReport<'a>>,
+    joints: Vec<JointReport<'a>>,
+}
+
+/// One filter's mean errors in an [`EvalReport`].
+#[derive(serde::Serialize)]
+struct FilteredErrors<'a> {
+    variant: &'a str,
+    mean_euler_deg: f64,
+    mean_geodesic_deg: f64,
+}
+
+/// One dataset's errors in an [`EvalReport`].
+#[derive(serde::Serialize)]
+struct DatasetReport<'a> {
+    dataset: &'a str,
+    frames: usize,
+    euler_deg: f64,
+    geodesic_deg: f64,
+    position_cm: f64,
+}
+
+/// One joint's errors in an [`EvalReport`]; the root, aligned, has no position error.
+#[derive(serde::Serialize)]
+struct JointReport<'a> {
+    joint: &'a str,
+    euler_deg: f64,
+    geodesic_deg: f64,
+    position_cm: Option<f64>,
+}
+
+impl<'a> EvalReport<'a> {
+    fn new(
+        truth_masks: bool,
+        all: &'a JointErrors,
+        positions: &PositionErrors,
+        datasets: &'a [DatasetErrors],
+        filtered: &'a [(String, JointErrors)],
+        recorded: Option<&'a (String, JointErrors)>,
+    ) -> EvalReport<'a> {
+        let means = |(label, errors): &'a (String, JointErrors)| FilteredErrors {
+            variant: label,
+            mean_euler_deg: errors.mean_euler(),
+            mean_geodesic_deg: errors.mean_geodesic(),
+        };
+        EvalReport {
+            masks: if truth_masks {
+                "ground truth"
+            } else {
+                "segmenter"
+            },
+            frames: all.frames,
+            mean_euler_deg: all.mean_euler(),
+            mean_geodesic_deg: all.mean_geodesic(),
+            mean_position_cm: positions.mean_cm(),
+            filtered: filtered.iter().map(means).collect(),
+            recorded_take: recorded.map(means),
+            datasets: datasets
+                .iter()
+                .map(|d| DatasetReport {
+                    dataset: &d.name,
+                    frames: d.frames,
+                    euler_deg: d.euler_deg,
+                    geodesic_deg: d.geodesic_deg,
+                    position_cm: d.position_cm,
+                })
+                .collect(),
+            joints: all
+                .names
+                .iter()
+                .enumerate()
+                .map(|(j, joint)| JointReport {
+                    joint,
+                    euler_deg: all.euler(j),
+                    geodesic_deg: all.geodesic(j),
+                    position_cm: positions.of_suit_joint(j),
+                })
+                .collect(),
+        }
+    }
+}
+
 fn eval(
     suit_dir: &Path,
     data: &[PathBuf],
@@ -1677,6 +1788,8 @@ fn eval(
         positions,
         datasets: per_dataset,
         frames: per_frame,
+        filtered,
+        recorded,
     } = evaluate(suit_dir, data, truth_masks, true)?;
     if let Some(path) = frames {
         let names: Vec<String> = per_dataset.iter().map(|d| d.name.clone()).collect();
@@ -1749,39 +1862,17 @@ fn eval(
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     if let Some(path) = json {
-        let datasets: Vec<String> = per_dataset
-            .iter()
-            .map(|d| {
-                format!(
-                    "{{\"dataset\": \"{}\", \"frames\": {}, \"euler_deg\": {:.4}, \"geodesic_deg\": {:.4}, \"position_cm\": {:.4}}}",
-                    d.name, d.frames, d.euler_deg, d.geodesic_deg, d.position_cm
-                )
-            })
-            .collect();
-        let joints: Vec<String> = names
-            .iter()
-            .enumerate()
-            .map(|(j, n)| {
-                let position = positions
-                    .of_suit_joint(j)
-                    .map_or("null".to_owned(), |cm| format!("{cm:.4}"));
-                format!(
-                    "{{\"joint\": \"{n}\", \"euler_deg\": {:.4}, \"geodesic_deg\": {:.4}, \"position_cm\": {position}}}",
-                    all.euler(j),
-                    all.geodesic(j)
-                )
-            })
-            .collect();
-        let text = format!(
-            "{{\"masks\": \"{}\", \"mean_euler_deg\": {:.4}, \"mean_geodesic_deg\": {:.4}, \"mean_position_cm\": {:.4}, \"frames\": {},\n \"datasets\": [{}],\n \"joints\": [{}]}}\n",
-            if truth_masks { "ground truth" } else { "segmenter" },
-            all.mean_euler(),
-            all.mean_geodesic(),
-            positions.mean_cm(),
-            all.frames,
-            datasets.join(", "),
-            joints.join(", ")
+        let report = EvalReport::new(
+            truth_masks,
+            &all,
+            &positions,
+            &per_dataset,
+            &filtered,
+            recorded.as_ref(),
         );
+        let mut text = serde_json::to_string_pretty(&report)
+            .with_context(|| format!("cannot encode {}", path.display()))?;
+        text.push('\n');
         suitcap::io::write_atomic(path, text.as_bytes())
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
