@@ -198,15 +198,34 @@ pub fn parse_spec(spec: &str) -> Result<SourceSpec, SourceError> {
     if is_y4m {
         return Ok(SourceSpec::Y4m(path.to_path_buf()));
     }
-    let reason = if path.exists() {
-        "expected a camera (/dev/videoN or an index), a directory of frames or a .y4m file"
+    let reason = if !path.exists() {
+        "no such file or directory".to_string()
+    } else if is_compressed_video(path) {
+        // A phone's or a camera app's recording: no decoder for these is built in.
+        format!(
+            "a compressed video file, which suitcap does not decode; convert it to Y4M first, e.g. \
+             `ffmpeg -i {trimmed:?} -pix_fmt yuv420p {:?}`",
+            path.with_extension("y4m").display().to_string()
+        )
     } else {
-        "no such file or directory"
+        "expected a camera (/dev/videoN or an index), a directory of frames or a .y4m file"
+            .to_string()
     };
     Err(SourceError::UnknownSpec {
         spec: spec.to_string(),
-        reason: reason.to_string(),
+        reason,
     })
+}
+
+/// Whether `path` names a compressed video container by its extension (MP4, QuickTime,
+/// Matroska, WebM, AVI, MPEG transport streams).
+fn is_compressed_video(path: &Path) -> bool {
+    const VIDEO: [&str; 9] = [
+        "mp4", "m4v", "mov", "mkv", "webm", "avi", "ts", "mts", "mpg",
+    ];
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| VIDEO.iter().any(|v| e.eq_ignore_ascii_case(v)))
 }
 
 /// Opens the source named by `spec`: "/dev/videoN" or a device index like "0"
@@ -298,6 +317,27 @@ mod tests {
             parse_spec("99999999999999"),
             Err(SourceError::UnknownSpec { .. })
         ));
+    }
+
+    #[test]
+    fn a_compressed_video_is_named_with_how_to_convert_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let clip = dir.path().join("take.MOV");
+        std::fs::write(&clip, b"not decoded").unwrap();
+        let error = parse_spec(clip.to_str().unwrap()).unwrap_err().to_string();
+        assert!(error.contains("compressed video"), "{error}");
+        assert!(
+            error.contains(&format!(
+                "{:?}",
+                dir.path().join("take.y4m").display().to_string()
+            )),
+            "{error}"
+        );
+        // Any other file is still told what is expected.
+        let notes = dir.path().join("notes.txt");
+        std::fs::write(&notes, b"").unwrap();
+        let error = parse_spec(notes.to_str().unwrap()).unwrap_err().to_string();
+        assert!(error.contains("a .y4m file"), "{error}");
     }
 
     #[test]
