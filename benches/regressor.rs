@@ -1,11 +1,13 @@
 //! RVM inference benchmark on the shipped default suit: the descriptors of the bundled demo clip's 60
 //! frames (`suits/default/demo/640x480/`, segmented and described by the suit's own models in the
 //! set-up, not timed), then per frame
-//! - `predict`: the regression alone (a distance to each relevance vector and a matrix-vector
-//!   product, `Rvm::predict_into`), the "inference for one frame ≤ 1 ms";
-//! - `predict + decode`: the same and the pose vector decoded into the BVH frame through the camera
-//!   (`PoseLayout::decode`), which is what the pipeline's regression stage does before the root's
-//!   position correction.
+//! - `predict`: the RVM alone (a distance to each relevance vector and a matrix-vector product,
+//!   `Rvm::predict_into`);
+//! - `predict + exemplars`: the RVM and the blend towards the nearest exemplars
+//!   (`Regressor::predict_into`, `pose::exemplars`), the "inference for one frame ≤ 1 ms";
+//! - `predict + exemplars + decode`: the same and the pose vector decoded into the BVH frame
+//!   through the camera (`PoseLayout::decode`), which is what the pipeline's regression stage does
+//!   before the root's position correction.
 //!
 //! Each iteration takes the next frame's descriptor in turn, so the kernel's zeros (relevance vectors
 //! too far from the frame, skipped in the product) are those of real frames. Times are wall-clock
@@ -78,25 +80,35 @@ fn bench(c: &mut Criterion) {
         frames.descriptors.len()
     );
     let mut pose = vec![0.0; regressor.rvm.outputs];
-    // The next frame's descriptor regressed into `pose`; its index.
+    // The next frame's descriptor regressed into `pose`, by the RVM alone or with the
+    // exemplars' blend as the pipeline runs it; its index.
     let mut k = 0;
-    let mut regress_next = |pose: &mut [f32]| {
+    let mut regress_next = |pose: &mut [f32], with_exemplars: bool| {
         k = (k + 1) % frames.descriptors.len();
-        regressor
-            .rvm
-            .predict_into(black_box(&frames.descriptors[k]), pose);
+        let descriptor = black_box(&frames.descriptors[k]);
+        if with_exemplars {
+            regressor.predict_into(descriptor, pose);
+        } else {
+            regressor.rvm.predict_into(descriptor, pose);
+        }
         k
     };
     let mut group = c.benchmark_group("regressor");
     group.bench_function("predict", |b| {
         b.iter(|| {
-            regress_next(&mut pose);
+            regress_next(&mut pose, false);
             black_box(&pose);
         })
     });
-    group.bench_function("predict + decode", |b| {
+    group.bench_function("predict + exemplars", |b| {
         b.iter(|| {
-            let k = regress_next(&mut pose);
+            regress_next(&mut pose, true);
+            black_box(&pose);
+        })
+    });
+    group.bench_function("predict + exemplars + decode", |b| {
+        b.iter(|| {
+            let k = regress_next(&mut pose, true);
             black_box(regressor.layout.decode(
                 &regressor.skeleton.skeleton,
                 &pose,

@@ -403,9 +403,16 @@ fn check_trained_models(suit: &Path, definition: &SuitDefinition) -> anyhow::Res
     if suit.join(REGRESSOR_FILE).exists() {
         let regressor = Regressor::load(suit, definition)?;
         loaded.push(format!(
-            "regressor ({} descriptor, {} relevance vectors)",
+            "regressor ({} descriptor, {} relevance vectors, {})",
             regressor.descriptor.name(),
-            regressor.rvm.len()
+            regressor.rvm.len(),
+            regressor
+                .exemplars
+                .as_ref()
+                .map_or("no exemplars".to_string(), |e| format!(
+                    "{} exemplars",
+                    e.len()
+                ))
         ));
     } else {
         missing.push(REGRESSOR_FILE);

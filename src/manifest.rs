@@ -22,8 +22,8 @@ pub const MANIFEST_FILE: &str = "model.toml";
 /// The format this build writes; format 1 (before the checksums) is read but not checked.
 pub const MANIFEST_FORMAT: u32 = 2;
 /// The model files a manifest records, where the suit has them: the segmenter tables, the three
-/// codebooks, the regressor and its skeleton.
-pub fn model_files() -> [String; 6] {
+/// codebooks, the regressor, its skeleton and its exemplars.
+pub fn model_files() -> [String; 7] {
     use crate::descriptor::{FC_CODEBOOK, HOG_CODEBOOK, SILHOUETTE_CODEBOOK};
     [
         crate::segment::tables::SEGMENTER_FILE.to_string(),
@@ -32,6 +32,7 @@ pub fn model_files() -> [String; 6] {
         format!("{SILHOUETTE_CODEBOOK}.bin"),
         crate::pose::regressor::REGRESSOR_FILE.to_string(),
         crate::pose::regressor::SKELETON_FILE.to_string(),
+        crate::pose::exemplars::EXEMPLARS_FILE.to_string(),
     ]
 }
 

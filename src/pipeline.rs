@@ -212,7 +212,6 @@ impl PosePipeline {
         };
         let started = Instant::now();
         self.regressor
-            .rvm
             .predict_into(&descriptor.values, &mut self.pose);
         let bbox = (x0 as f32, y0 as f32, x1 as f32, y1 as f32);
         let mut frame = self.regressor.layout.decode(

@@ -17,6 +17,7 @@
 pub mod chart;
 pub mod correction;
 pub mod eval;
+pub mod exemplars;
 pub mod registration;
 pub mod regressor;
 pub mod rvm;

@@ -9,6 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::exemplars::{Exemplars, ExemplarsError, EXEMPLARS_FILE};
 use super::rvm::Rvm;
 use super::{LayoutError, PoseLayout, RotationEncoding};
 use crate::bvh::{BvhError, Motion};
@@ -32,6 +33,9 @@ pub struct Regressor {
     /// The hierarchy written to BVH, with the template frame.
     pub skeleton: Motion,
     pub layout: PoseLayout,
+    /// Training frames whose nearest ones pull the RVM's estimate towards poses seen with such
+    /// a picture ([`Exemplars`]); `None` for a suit trained before them.
+    pub exemplars: Option<Exemplars>,
 }
 
 /// A regressor that cannot be loaded.
@@ -45,6 +49,8 @@ pub enum RegressorError {
     Layout { path: PathBuf, source: LayoutError },
     #[error("{path}: {message}")]
     Mismatch { path: PathBuf, message: String },
+    #[error(transparent)]
+    Exemplars(#[from] ExemplarsError),
 }
 
 fn kind_code(kind: DescriptorKind) -> f32 {
@@ -84,7 +90,30 @@ impl Regressor {
         );
         m.write(&suit_dir.join(REGRESSOR_FILE))?;
         self.skeleton.write(&suit_dir.join(SKELETON_FILE))?;
+        match &self.exemplars {
+            Some(exemplars) => exemplars.save(suit_dir)?,
+            // Another regressor's exemplars must not be blended into this one's poses.
+            None => match std::fs::remove_file(suit_dir.join(EXEMPLARS_FILE)) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(ModelError::Write {
+                        path: suit_dir.join(EXEMPLARS_FILE),
+                        source: e,
+                    }
+                    .into())
+                }
+                _ => {}
+            },
+        }
         Ok(())
+    }
+
+    /// The pose vector of a frame's `descriptor`: the RVM's, moved towards the nearest
+    /// exemplars' where the suit has them.
+    pub fn predict_into(&self, descriptor: &[f32], pose: &mut [f32]) {
+        self.rvm.predict_into(descriptor, pose);
+        if let Some(exemplars) = &self.exemplars {
+            exemplars.blend(descriptor, pose);
+        }
     }
 
     /// Reads a suit's regressor, checking it against the suit's skeleton and its own shapes.
@@ -169,16 +198,63 @@ impl Regressor {
             weights: weights.data.clone(),
             noise,
         };
+        let exemplars = Exemplars::load(suit_dir, dim, layout.len())?;
         Ok(Regressor {
             rvm,
             descriptor,
             skeleton,
             layout,
+            exemplars,
         })
     }
 
     /// The template frame (values of the joints the suit does not estimate).
     pub fn template(&self) -> &[f32] {
         self.skeleton.frame(0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shipped() -> Regressor {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("suits/default");
+        let suit = SuitDefinition::load_dir(&dir).expect("the default suit");
+        Regressor::load(&dir, &suit).expect("the default regressor")
+    }
+
+    #[test]
+    fn the_exemplars_move_the_rvms_pose_by_their_share() {
+        let mut regressor = shipped();
+        let (dim, outputs) = (regressor.rvm.dim, regressor.rvm.outputs);
+        let descriptor: Vec<f32> = (0..dim).map(|i| (i % 7) as f32 / 70.0).collect();
+        let mut alone = vec![0.0; outputs];
+        regressor.rvm.predict_into(&descriptor, &mut alone);
+        // One exemplar, all of whose pose values are 1: the pose moves half-way to it.
+        let mut exemplars =
+            Exemplars::new(vec![0.0; dim], dim, vec![1.0; outputs], outputs).expect("valid");
+        exemplars.share = 0.5;
+        regressor.exemplars = Some(exemplars);
+        let mut blended = vec![0.0; outputs];
+        regressor.predict_into(&descriptor, &mut blended);
+        for (b, a) in blended.iter().zip(&alone) {
+            assert!((b - (a + 1.0) / 2.0).abs() < 1e-5, "{b} from {a}");
+        }
+        // Without exemplars the RVM's pose is the regressor's.
+        regressor.exemplars = None;
+        regressor.predict_into(&descriptor, &mut blended);
+        assert_eq!(blended, alone);
+    }
+
+    #[test]
+    fn saving_without_exemplars_removes_the_file_an_earlier_save_left() {
+        let mut regressor = shipped();
+        let dir = tempfile::tempdir().expect("tempdir");
+        regressor.save(dir.path()).expect("save");
+        assert!(dir.path().join(EXEMPLARS_FILE).exists());
+        regressor.exemplars = None;
+        regressor.save(dir.path()).expect("save");
+        assert!(!dir.path().join(EXEMPLARS_FILE).exists());
     }
 }

@@ -17,8 +17,9 @@
 #    at run time; the kernel width chosen on every fifth clip held back, all its renderings; each
 #    joint's rotation as the first two columns of its matrix, `--rotations matrix`, which on the
 #    held-back clips erred 0.27-0.35 degrees less than the paper's sines and cosines of the Euler
-#    angles at every kernel width: docs/measurements.md, sixth session of 2026-12-05), written into
-#    suits/default/;
+#    angles at every kernel width: docs/measurements.md, sixth session of 2026-12-05), and every 8th
+#    training frame's descriptor and pose as the exemplars blended into its estimate (exemplars.bin;
+#    eighth session of 2026-12-07), written into suits/default/;
 # 3. suitcap-train limits: joint limits (joint_limits.toml) from the same clips.
 set -euo pipefail
 cd "$(dirname "$0")/../.."

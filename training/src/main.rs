@@ -83,6 +83,19 @@ enum Command {
         #[command(flatten)]
         run: SuitRun,
     },
+    /// Keep every 8th training frame's descriptor and pose as the regressor's exemplars, whose
+    /// nearest ones pull its estimate towards poses seen with such a picture; writes
+    /// SUIT/exemplars.bin and records it in the manifest. `suit` does this too: for a suit trained
+    /// before, give the datasets it was trained on.
+    Exemplars {
+        #[arg(long)]
+        suit: PathBuf,
+        #[arg(long, required = true)]
+        data: Vec<PathBuf>,
+        /// Masks the descriptors are computed with, as the regressor's were (`suit --masks`).
+        #[arg(long, value_enum, default_value_t = TrainingMasks::Segmenter)]
+        masks: TrainingMasks,
+    },
     /// Learn the joint limits (per rotation channel, the range the training motions cover plus a
     /// margin) from mocap-aligned datasets or BVH clips; writes SUIT/joint_limits.toml.
     Limits {
@@ -861,8 +874,7 @@ impl TrainingData {
         seed: u64,
     ) -> anyhow::Result<(suitcap::pose::rvm::Rvm, suitcap::pose::rvm::TrainReport)> {
         use suitcap::pose::rvm::{Rvm, TrainOptions};
-        let x = [self.x.as_slice(), &self.held_x].concat();
-        let y = [self.y.as_slice(), &self.held_y].concat();
+        let (x, y) = self.every_frame();
         let options = TrainOptions {
             basis,
             width,
@@ -892,6 +904,25 @@ impl TrainingData {
 
     fn frames(&self) -> usize {
         (self.x.len() + self.held_x.len()) / self.dim
+    }
+
+    /// The descriptors and pose vectors of every frame, held-back ones last.
+    fn every_frame(&self) -> (Vec<f32>, Vec<f32>) {
+        (
+            [self.x.as_slice(), &self.held_x].concat(),
+            [self.y.as_slice(), &self.held_y].concat(),
+        )
+    }
+
+    /// Every [`suitcap::pose::exemplars::EXEMPLAR_STRIDE`]th frame, held-back ones included.
+    fn exemplars(&self) -> anyhow::Result<suitcap::pose::exemplars::Exemplars> {
+        let (x, y) = self.every_frame();
+        Ok(suitcap::pose::exemplars::Exemplars::from_training(
+            &x,
+            self.dim,
+            &y,
+            self.layout.len(),
+        )?)
     }
 
     /// The kernel width among ¼, ½, 1 and 2 × the median descriptor distance with the lowest angle
@@ -1081,6 +1112,7 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         None => set.choose_width(basis, seed)?,
     };
     let (rvm, report) = set.fit(basis, width, seed)?;
+    let exemplars = set.exemplars()?;
     let first_dataset = Dataset::open(&data[0])?;
     let template = suitcap::bvh::Motion::new(
         first_dataset.motion.skeleton.clone(),
@@ -1093,6 +1125,7 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         descriptor: kind,
         skeleton: template,
         layout,
+        exemplars: Some(exemplars),
     };
     // Write into a scratch directory first, then move each file into place, and last the
     // manifest with every model file's checksum (see `suitcap::manifest`): a run stopped before
@@ -1104,6 +1137,7 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
     for name in [
         suitcap::pose::regressor::REGRESSOR_FILE,
         suitcap::pose::regressor::SKELETON_FILE,
+        suitcap::pose::exemplars::EXEMPLARS_FILE,
     ] {
         std::fs::rename(scratch.join(name), suit_dir.join(name))
             .with_context(|| format!("cannot move {name} into {}", suit_dir.display()))?;
@@ -1139,6 +1173,48 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         report.seconds,
         report.iterations,
         suit_dir.display()
+    );
+    Ok(())
+}
+
+/// Writes a trained suit's exemplars from the datasets it was trained on (see
+/// [`suitcap::pose::exemplars`]), then records the file in its manifest.
+fn exemplars(suit_dir: &Path, data: &[PathBuf], masks: TrainingMasks) -> anyhow::Result<()> {
+    use suitcap::descriptor::Codebooks;
+    use suitcap::manifest::{record_files, Manifest};
+    use suitcap::pose::regressor::Regressor;
+    let started = std::time::Instant::now();
+    let suit = SuitDefinition::load_dir(suit_dir)?;
+    let codebooks = Codebooks::load(suit_dir)?;
+    let regressor = Regressor::load(suit_dir, &suit)?;
+    let tables = masks.segmenter_tables(suit_dir)?;
+    let set = TrainingData::collect(
+        &suit,
+        &codebooks,
+        data,
+        &[regressor.descriptor],
+        tables.as_ref(),
+        regressor.layout.rotations,
+    )?
+    .remove(0);
+    let exemplars = set.exemplars()?;
+    let kept = exemplars.len();
+    exemplars.save(suit_dir)?;
+    // A suit without a manifest (hand-assembled) stays without one.
+    if let Some(mut manifest) = Manifest::load(suit_dir)? {
+        manifest.files = record_files(suit_dir)?;
+        let path = suit_dir.join(MANIFEST_FILE);
+        suitcap::io::write_atomic(&path, manifest.to_toml()?.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    println!(
+        "{kept} exemplars (every {}th of {} training frames, {} nearest averaged, share {}) in {:.1} s → {}",
+        suitcap::pose::exemplars::EXEMPLAR_STRIDE,
+        set.frames(),
+        suitcap::pose::exemplars::NEIGHBOURS,
+        suitcap::pose::exemplars::SHARE,
+        started.elapsed().as_secs_f64(),
+        suit_dir.join(suitcap::pose::exemplars::EXEMPLARS_FILE).display()
     );
     Ok(())
 }
@@ -1945,11 +2021,13 @@ fn experiments(
                 std::fs::copy(suit_dir.join(name), variant.join(name))
                     .with_context(|| format!("cannot copy {name}"))?;
             }
+            // The RVM alone: the experiments compare descriptors and basis sizes.
             Regressor {
                 rvm,
                 descriptor: kind,
                 skeleton: template.clone(),
                 layout: layout.clone(),
+                exemplars: None,
             }
             .save(&variant)?;
             let errors = evaluate(&variant, data, false, false)?.angles;
@@ -2030,6 +2108,7 @@ fn main() -> ExitCode {
             out,
             run,
         } => experiments(suit, train, data, out, run),
+        Command::Exemplars { suit, data, masks } => exemplars(suit, data, *masks),
         Command::Limits { suit, data, margin } => limits(suit, data, *margin),
         Command::Coverage { suit, train, data } => coverage(suit, train, data),
         Command::Import {
