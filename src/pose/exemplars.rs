@@ -200,16 +200,10 @@ impl Exemplars {
     /// [`Exemplars::mean_pose`] for `descriptor`. Leaves `pose` as it is where no mean can be
     /// formed.
     pub fn blend(&self, descriptor: &[f32], pose: &mut [f32]) {
-        let Some(nearest) = self
-            .nearest(descriptor)
-            .filter(|_| pose.len() == self.outputs)
-        else {
-            return;
-        };
-        pose.iter_mut().for_each(|p| *p *= 1.0 - self.share);
-        for (i, weight) in nearest {
-            for (p, e) in pose.iter_mut().zip(self.pose(i)) {
-                *p += self.share * weight * e;
+        let mut mean = vec![0.0; self.outputs];
+        if pose.len() == self.outputs && self.mean_pose(descriptor, &mut mean) {
+            for (p, m) in pose.iter_mut().zip(&mean) {
+                *p += self.share * (m - *p);
             }
         }
     }
