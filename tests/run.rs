@@ -270,6 +270,61 @@ fn copied_suit(dir: &Path, models: &[&str]) -> PathBuf {
     suit
 }
 
+#[test]
+fn exemplars_are_written_for_a_trained_suit_and_recorded_in_its_manifest() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mut models = MODEL_FILES_BUT_THE_REGRESSOR.to_vec();
+    models.extend(["regressor.bin", "model.toml"]);
+    // The shipped suit without its exemplars, as a suit trained before them.
+    let suit = copied_suit(tmp.path(), &models);
+    let manifest = std::fs::read_to_string(suit.join("model.toml")).expect("the manifest");
+    let without: String = manifest
+        .lines()
+        .filter(|l| !l.contains("exemplars.bin"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_ne!(
+        without, manifest,
+        "the shipped manifest records the exemplars"
+    );
+    std::fs::write(suit.join("model.toml"), without).expect("write");
+    let check = || {
+        succeeded(
+            suitcap()
+                .args(["check", "--suit"])
+                .arg(&suit)
+                .output()
+                .expect("runs"),
+        )
+    };
+    let before = check();
+    assert!(
+        before.contains("no exemplars") && before.contains("(6 checksums match)"),
+        "{before}"
+    );
+    let data = generated_clip(&tmp.path().join("clip"));
+    let train = Path::new(env!("CARGO_BIN_EXE_suitcap")).with_file_name("suitcap-train");
+    let printed = succeeded(
+        Command::new(&train)
+            .args(["exemplars", "--suit"])
+            .arg(&suit)
+            .arg("--data")
+            .arg(&data)
+            .output()
+            .expect("runs"),
+    );
+    // Twelve frames with the person: every 8th, frames 0 and 8.
+    assert!(
+        printed.starts_with("2 exemplars (every 8th of 12 training frames"),
+        "{printed}"
+    );
+    let after = check();
+    assert!(
+        after.contains("2 exemplars") && after.contains("(7 checksums match)"),
+        "{after}"
+    );
+}
+
 const MODEL_FILES_BUT_THE_REGRESSOR: [&str; 5] = [
     "segmenter.bin",
     "codebook_fc.bin",
