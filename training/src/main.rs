@@ -1730,8 +1730,13 @@ fn evaluate_dataset(
         smooth_backwards(&mut filter, &mut take, frame_time, (&nobody, &[]));
         let mut errors = JointErrors::new(names.clone());
         let channels = take.len() / dataset.frame_count().max(1);
-        for (index, frame) in take.chunks_exact(channels.max(1)).enumerate() {
-            if !nobody.contains(&index) {
+        // The frames with nobody found have no angle error, as forwards.
+        for ((index, frame), record) in take
+            .chunks_exact(channels.max(1))
+            .enumerate()
+            .zip(&run.frames)
+        {
+            if record.angles_deg.is_some() {
                 errors.add(&layout, dataset.motion.frame(index), frame);
             }
         }
@@ -1814,11 +1819,7 @@ impl<'a> EvalReport<'a> {
             mean_geodesic_deg: errors.mean_geodesic(),
         };
         EvalReport {
-            masks: if truth_masks {
-                "ground truth"
-            } else {
-                "segmenter"
-            },
+            masks: masks_name(truth_masks),
             frames: all.frames,
             mean_euler_deg: all.mean_euler(),
             mean_geodesic_deg: all.mean_geodesic(),
@@ -1847,6 +1848,15 @@ impl<'a> EvalReport<'a> {
                 })
                 .collect(),
         }
+    }
+}
+
+/// How an evaluation names the masks its descriptors were computed in.
+fn masks_name(truth_masks: bool) -> &'static str {
+    if truth_masks {
+        "ground truth"
+    } else {
+        "segmenter"
     }
 }
 
@@ -1895,11 +1905,7 @@ fn eval(
         all.mean_geodesic(),
         positions.mean_cm(),
         all.frames,
-        if truth_masks {
-            "ground truth"
-        } else {
-            "segmenter"
-        }
+        masks_name(truth_masks)
     );
     if let Some(path) = csv {
         suitcap::io::write_atomic(path, all.to_csv(Some(&positions)).as_bytes())
@@ -1911,11 +1917,7 @@ fn eval(
             title: format!(
                 "Joint angle error (°) over {} frames, masks: {}",
                 all.frames,
-                if truth_masks {
-                    "ground truth"
-                } else {
-                    "segmenter"
-                }
+                masks_name(truth_masks)
             ),
             joints: names.clone(),
             series: vec![
