@@ -323,6 +323,28 @@ fn exemplars_are_written_for_a_trained_suit_and_recorded_in_its_manifest() {
         after.contains("2 exemplars") && after.contains("(7 checksums match)"),
         "{after}"
     );
+    // A broken exemplars file is named, and writing the exemplars again mends it.
+    let file = suit.join("exemplars.bin");
+    let bytes = std::fs::read(&file).expect("read");
+    std::fs::write(&file, &bytes[..bytes.len() / 2]).expect("write");
+    let broken = suitcap()
+        .args(["check", "--suit"])
+        .arg(&suit)
+        .output()
+        .expect("runs");
+    assert!(!broken.status.success());
+    let stderr = String::from_utf8_lossy(&broken.stderr);
+    assert!(stderr.contains("exemplars.bin"), "{stderr}");
+    succeeded(
+        Command::new(&train)
+            .args(["exemplars", "--suit"])
+            .arg(&suit)
+            .arg("--data")
+            .arg(&data)
+            .output()
+            .expect("runs"),
+    );
+    assert_eq!(check(), after);
 }
 
 const MODEL_FILES_BUT_THE_REGRESSOR: [&str; 5] = [

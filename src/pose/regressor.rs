@@ -118,6 +118,17 @@ impl Regressor {
 
     /// Reads a suit's regressor, checking it against the suit's skeleton and its own shapes.
     pub fn load(suit_dir: &Path, suit: &SuitDefinition) -> Result<Regressor, RegressorError> {
+        let mut regressor = Regressor::load_without_exemplars(suit_dir, suit)?;
+        regressor.exemplars = Exemplars::load(suit_dir, regressor.rvm.dim, regressor.layout.len())?;
+        Ok(regressor)
+    }
+
+    /// [`Regressor::load`] without reading the exemplars (`exemplars` is `None`): for writing
+    /// them anew, whatever state the old file is in.
+    pub fn load_without_exemplars(
+        suit_dir: &Path,
+        suit: &SuitDefinition,
+    ) -> Result<Regressor, RegressorError> {
         let path = suit_dir.join(REGRESSOR_FILE);
         let m = ModelFile::read(&path, REGRESSOR_KIND, REGRESSOR_VERSION)?;
         let skeleton = Motion::load(&suit_dir.join(SKELETON_FILE))?;
@@ -198,13 +209,12 @@ impl Regressor {
             weights: weights.data.clone(),
             noise,
         };
-        let exemplars = Exemplars::load(suit_dir, dim, layout.len())?;
         Ok(Regressor {
             rvm,
             descriptor,
             skeleton,
             layout,
-            exemplars,
+            exemplars: None,
         })
     }
 

@@ -1186,7 +1186,8 @@ fn exemplars(suit_dir: &Path, data: &[PathBuf], masks: TrainingMasks) -> anyhow:
     let started = std::time::Instant::now();
     let suit = SuitDefinition::load_dir(suit_dir)?;
     let codebooks = Codebooks::load(suit_dir)?;
-    let regressor = Regressor::load(suit_dir, &suit)?;
+    // Not its exemplars: they are what is written anew, and may be a broken file.
+    let regressor = Regressor::load_without_exemplars(suit_dir, &suit)?;
     let tables = masks.segmenter_tables(suit_dir)?;
     let set = TrainingData::collect(
         &suit,
@@ -1198,7 +1199,6 @@ fn exemplars(suit_dir: &Path, data: &[PathBuf], masks: TrainingMasks) -> anyhow:
     )?
     .remove(0);
     let exemplars = set.exemplars()?;
-    let kept = exemplars.len();
     exemplars.save(suit_dir)?;
     // A suit without a manifest (hand-assembled) stays without one.
     if let Some(mut manifest) = Manifest::load(suit_dir)? {
@@ -1208,11 +1208,12 @@ fn exemplars(suit_dir: &Path, data: &[PathBuf], masks: TrainingMasks) -> anyhow:
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     println!(
-        "{kept} exemplars (every {}th of {} training frames, {} nearest averaged, share {}) in {:.1} s → {}",
+        "{} exemplars (every {}th of {} training frames, {} nearest averaged, share {}) in {:.1} s → {}",
+        exemplars.len(),
         suitcap::pose::exemplars::EXEMPLAR_STRIDE,
         set.frames(),
-        suitcap::pose::exemplars::NEIGHBOURS,
-        suitcap::pose::exemplars::SHARE,
+        exemplars.neighbours,
+        exemplars.share,
         started.elapsed().as_secs_f64(),
         suit_dir.join(suitcap::pose::exemplars::EXEMPLARS_FILE).display()
     );
