@@ -113,6 +113,12 @@ enum Command {
         /// session of 2026-12-06).
         #[arg(long)]
         part_look: Option<f32>,
+        /// How many nats the last look for a hand leans towards the part within the ellipse
+        /// where it is expected beyond the end of a suit's arm, in frames where less than a
+        /// quarter of that ellipse was found (default 3; 0 switches that look off, as before the
+        /// ninth session of 2026-12-07).
+        #[arg(long)]
+        hand_look: Option<f32>,
         /// Share of the person's own head and shoe colours, learned from the frames before, in the
         /// part test (default 0.3; 0 uses the trained part table alone, as before the ninth session
         /// of 2026-12-05).
@@ -132,6 +138,11 @@ enum Command {
         /// before (default 8; 2, as before the third session of 2026-12-07).
         #[arg(long)]
         first_frame_passes: Option<u32>,
+        /// The weight of the label prior, relative to the temporal term's, in a stream's first two
+        /// frames, which have no second-order history (default 1; a first frame that leaves most
+        /// of what looks like the suit out is segmented again without it)
+        #[arg(long)]
+        label_prior_share: Option<f32>,
         /// Fill holes in the final mask up to this many markers' areas that are mostly of the
         /// suit's colours (default 4; 0 switches it off, as before the fourth session of
         /// 2026-12-07).
@@ -546,15 +557,16 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
 }
 
 /// The segmenter's options with `suitcap segment`'s overrides of the part memory and the last
-/// look for a head and shoes (nats), the share of the person's own part colours, the edge
-/// snapping's room share for marker colours, the cloth's reach from the markers (cm), the passes
-/// over a stream's first frame, the room model (`no_room`: off), the outline's unmixing
-/// (`no_unmix`: off) and the largest hole of the suit's colours filled (markers' areas).
+/// looks for a head and shoes and for hands (nats), the share of the person's own part colours,
+/// the edge snapping's room share for marker colours, the cloth's reach from the markers (cm),
+/// the passes over a stream's first frame and the label prior's share in its first two frames,
+/// the room model (`no_room`: off), the outline's unmixing (`no_unmix`: off) and the largest hole
+/// of the suit's colours filled (markers' areas).
 fn segmenter_options(
-    (part_memory, part_look): (Option<f32>, Option<f32>),
+    (part_memory, part_look, hand_look): (Option<f32>, Option<f32>, Option<f32>),
     part_colours: Option<f32>,
     (keep_room_share, suit_holes): (Option<f32>, Option<f32>),
-    (cloth_reach, first_frame_passes): (Option<f32>, Option<u32>),
+    (cloth_reach, first_frame_passes, label_prior_share): (Option<f32>, Option<u32>, Option<f32>),
     (no_room, no_unmix): (bool, bool),
 ) -> anyhow::Result<SegmenterOptions> {
     let mut options = SegmenterOptions::default();
@@ -586,6 +598,9 @@ fn segmenter_options(
     if let Some(nats) = part_look {
         options.part_look = at_least_zero("--part-look", nats, "number")?;
     }
+    if let Some(nats) = hand_look {
+        options.hand_look = at_least_zero("--hand-look", nats, "number")?;
+    }
     if let Some(share) = part_colours {
         if !(0.0..=1.0).contains(&share) {
             bail!("--part-colours: {share} is not a share between 0 and 1");
@@ -594,6 +609,9 @@ fn segmenter_options(
     }
     if let Some(share) = keep_room_share {
         options.snap.keep_room_share = at_least_zero("--keep-room-share", share, "share")?;
+    }
+    if let Some(share) = label_prior_share {
+        options.label_prior_share = at_least_zero("--label-prior-share", share, "share")?;
     }
     if let Some(cm) = cloth_reach {
         options.cloth_reach_cm = at_least_zero("--cloth-reach", cm, "number of cm")?;
@@ -1019,20 +1037,22 @@ fn main() -> ExitCode {
             weights,
             part_memory,
             part_look,
+            hand_look,
             part_colours,
             keep_room_share,
             cloth_reach,
             first_frame_passes,
+            label_prior_share,
             suit_holes,
             no_unmix,
             no_room,
             dump_graph,
             graph_out,
         } => segmenter_options(
-            (*part_memory, *part_look),
+            (*part_memory, *part_look, *hand_look),
             *part_colours,
             (*keep_room_share, *suit_holes),
-            (*cloth_reach, *first_frame_passes),
+            (*cloth_reach, *first_frame_passes, *label_prior_share),
             (*no_room, *no_unmix),
         )
         .and_then(|options| {

@@ -6,13 +6,15 @@
 //! s-t minimum cut, then keeps one person region. [`features`] quantises pixels, [`tables`] learns and
 //! stores the likelihoods, [`train`] fits them to frames with masks, [`segmenter`] runs them per frame
 //! on [`maxflow`] (a grid max-flow written for this), [`cleanup`] and [`snap`], with [`room`], the
-//! room behind the person learned pixel by pixel; [`gcg`] reads and
-//! writes frame graphs in the GCG1 format of the reference solver (`../shared/peers/maxflow/`). The
+//! room behind the person learned pixel by pixel, and [`hands`], where the suit's arms end;
+//! [`gcg`] reads and writes frame graphs in the GCG1 format of the reference solver
+//! (`../shared/peers/maxflow/`). The
 //! [`Mask`](crate::mask::Mask) it returns goes to marker detection.
 
 pub mod cleanup;
 pub mod features;
 pub mod gcg;
+pub mod hands;
 pub mod maxflow;
 pub mod room;
 pub mod segmenter;

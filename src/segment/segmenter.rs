@@ -6,8 +6,12 @@
 //!    and computes colour bins and gradients;
 //! 2. builds the graph: unaries `σ_C·C + σ_G·G + σ_M·M + σ_T·T` per pixel (the motion and temporal terms
 //!    use the segmenter's own masks of the previous one and two frames; the first frame uses the label
-//!    prior, and is segmented again until its mask settles, each pass learning the room from the
-//!    one before ([`SegmenterOptions::first_frame_passes`]); the second uses the terms it has), pairwise weights from the neighbourhood table on the four
+//!    prior instead ([`SegmenterOptions::label_prior_share`]), and is segmented again until its
+//!    mask settles, each pass learning the room from the one before
+//!    ([`SegmenterOptions::first_frame_passes`]), and from scratch without the prior if its suit
+//!    left out most of what looks like the suit ([`FIRST_FRAME_MAX_LEFT_OUT`]); the second uses
+//!    the motion term and that prior),
+//!    pairwise weights from the neighbourhood table on the four
 //!    axial edges (a label-pair energy A, B, D becomes an edge weight (2B − A − D)/2; the (D − A)/2 it
 //!    would add to both nodes' person cost is left out, see [`Segmenter::new`]). The cut looks for the
 //!    suit: its colour table is trained on the suit part of the masks only;
@@ -43,7 +47,9 @@
 //!    other frame; where less than a head's area was found above the suit, or less than the
 //!    shoes' below it, a last look floods only the ellipses where they are expected (above the
 //!    suit's top rows, below each leg's end), the part test leaning towards the part there
-//!    ([`SegmenterOptions::part_look`]); and the part test's colours mix
+//!    ([`SegmenterOptions::part_look`]), and likewise where a hand is expected beyond the end of
+//!    a suit's arm and less than a quarter of it was found ([`hands`](super::hands),
+//!    [`SegmenterOptions::hand_look`]); and the part test's colours mix
 //!    the trained table (every training subject's skin and shoes) with this person's own,
 //!    learned from the heads and shoes attached in the frames before
 //!    ([`SegmenterOptions::part_colour_share`]), the hands' test within the suit's rows more than
@@ -75,6 +81,7 @@ use super::features::{
     temporal_difference, ColourLut, FrameFeatures, MarkerGate, COLOUR_BINS, PATTERN_CLASSES,
     TEMPORAL_BINS,
 };
+use super::hands::{arm_ends, hand_pixels, ArmScratch, SUIT_HEIGHT_CM};
 use super::maxflow::{GridGraph, GridMaxFlow};
 use super::room::{RoomModel, RoomSettings};
 use super::snap::{snap_to_colour_edges, unmix_outline, Snapping, Unmixing};
@@ -145,6 +152,11 @@ pub struct SegmenterOptions {
     /// 0.9391. Keeping each pass's mask as the next one's history instead held its errors
     /// (0.9346 at 8).
     pub first_frame_passes: u32,
+    /// The weight, relative to σ_T, of the label prior (the person's and the background's share
+    /// of the training frames) that stands in for the temporal term in the frames without a
+    /// second-order history (a stream's first two). A first frame that leaves most of its
+    /// suit-looking pixels out is segmented again without it ([`FIRST_FRAME_MAX_LEFT_OUT`]).
+    pub label_prior_share: f32,
     /// How far the head, hands and shoes are looked for around the suit, as a share of the suit
     /// region's height (0: the mask is the suit only).
     pub part_reach: f32,
@@ -252,6 +264,17 @@ pub struct SegmenterOptions {
     /// neck, lost heads to dark pupils and shadows (the dance of the pose test sequences 0.8734 →
     /// 0.8635), so it stays above the neck (docs/measurements.md, ninth session of 2026-12-06).
     pub part_look: f32,
+    /// How many nats the last look leans towards the part within the ellipse where a hand is
+    /// expected beyond each end of the suit's arms ([`hands`](super::hands)), for a hand of
+    /// which less than [`HAND_FOUND_SHARE`] of that ellipse was found (0: no look for hands, as
+    /// before the ninth session of 2026-12-07). A hand over a room of skin's colours (the cat's
+    /// fur) is otherwise lost whole. Chosen on the 24 selection renderings with the label prior
+    /// at half its weight (docs/measurements.md, ninth session of 2026-12-07): 0 / 2 / **3**
+    /// gave 0.9518 / 0.9524 / **0.9528** (15 of 24 gaining, 6 losing). With the prior at its
+    /// whole weight 3 gave 0.9295 and 6 0.9288 (11 of 24 losing) against 0.9280: the ellipse
+    /// follows the forearm and a bent wrist does not, so a stronger lean takes in room beside
+    /// the hand.
+    pub hand_look: f32,
     /// Share of the person's own head and shoe colours in the part test's colour likelihood (0:
     /// the trained part table alone, as before the ninth session of 2026-12-05). The trained
     /// table holds every training subject's skin, hair and shoes, so a background of any skin's
@@ -292,6 +315,23 @@ pub const PART_MEMORY_RADIUS: usize = 2;
 /// for [`SegmenterOptions::suit_hole_markers`] to fill it.
 pub const SUIT_HOLE_MIN_SHARE: f32 = 0.8;
 
+/// The share of a stream's first frame's suit-looking pixels that its suit may leave out before
+/// the frame is segmented again without the label prior ([`Segmenter::segment`]). A person in
+/// front of a room keeps nearly all of them (the room rarely holds the suit's interleaving of cloth
+/// and markers); a first frame the prior hid keeps a few percent.
+pub const FIRST_FRAME_MAX_LEFT_OUT: f32 = 0.5;
+
+/// Whether pixel `i` of `features` looks like the suit: cloth or a marker's colour within the
+/// suit's interleaving of the two.
+fn looks_like_suit(features: &FrameFeatures, gate: &MarkerGate, i: usize) -> bool {
+    let c = features.colour[i];
+    is_suit_pattern(features.pattern[i], 3) && (gate.is_cloth(c) || gate.is_marker(c))
+}
+
+/// The share of a hand's expected ellipse that the part test must have found for the hand to
+/// count as found; less, and the last look floods the ellipse ([`SegmenterOptions::hand_look`]).
+pub const HAND_FOUND_SHARE: f32 = 0.25;
+
 /// The height a person is taken to have when the marker size is turned into pixels. The cut
 /// region (without the head, which is attached later) is shorter than the person, so the marker is
 /// taken a little smaller than it is; [`SegmenterOptions::off_cloth_max_markers`] was chosen so.
@@ -324,6 +364,7 @@ impl Default for SegmenterOptions {
             adapt_margin: 4,
             adapt_share: 0.7,
             first_frame_passes: 8,
+            label_prior_share: 1.0,
             part_reach: ATTACH_REACH,
             part_reach_narrow: PART_REACH,
             piece_reach: PART_REACH,
@@ -336,6 +377,7 @@ impl Default for SegmenterOptions {
             cloth_reach_cm: 24.0,
             part_memory: 1.5,
             part_look: 6.0,
+            hand_look: 3.0,
             part_colour_share: 0.3,
             hand_colour_share: 0.75,
             part_colour_rate: 0.3,
@@ -439,6 +481,15 @@ pub struct Segmenter {
     /// Where a head is expected above this frame's suit and shoes below it
     /// ([`SegmenterOptions::part_look`]).
     head_prior: Vec<bool>,
+    /// Where hands are expected beyond the ends of this frame's suit's arms
+    /// ([`SegmenterOptions::hand_look`]).
+    hand_prior: Vec<bool>,
+    /// The expected hands of which too little was found: where the last look floods.
+    hand_marks: Vec<bool>,
+    arm_scratch: ArmScratch,
+    /// Set while a stream's first frame is segmented again without the label prior
+    /// ([`Segmenter::segment`]).
+    label_prior_off: bool,
     shoe_prior: Vec<bool>,
     /// The last look's person and parts, and its band (the part band within the priors).
     look_parts: (Vec<bool>, Vec<bool>),
@@ -640,6 +691,10 @@ impl Segmenter {
             previous_parts: Vec::new(),
             grown_rows: Vec::new(),
             head_prior: Vec::new(),
+            hand_prior: Vec::new(),
+            hand_marks: Vec::new(),
+            arm_scratch: ArmScratch::default(),
+            label_prior_off: false,
             shoe_prior: Vec::new(),
             look_parts: (Vec::new(), Vec::new()),
             look_band: Vec::new(),
@@ -808,6 +863,13 @@ impl Segmenter {
             self.options.room.map_or(0.0, |r| r.cut_bonus),
         );
         let (source, sink, right, down) = self.graph.parts_mut();
+        // Without a second-order history, the label prior stands in for the temporal term.
+        let share = if self.label_prior_off {
+            0.0
+        } else {
+            self.options.label_prior_share
+        };
+        let prior = u.prior.map(|v| share * v);
         for i in 0..w * h {
             let c = f.colour[i];
             let colour = colour_index(c, f.pattern[i]);
@@ -827,13 +889,13 @@ impl Segmenter {
                         *el += u.motion[2 * l + lp][bin]
                             + match before_previous {
                                 Some(pp) => u.temporal[4 * l + 2 * lp + pp[i] as usize],
-                                None => u.prior[l],
+                                None => prior[l],
                             };
                     }
                 }
                 None => {
-                    e[0] += u.prior[0];
-                    e[1] += u.prior[1];
+                    e[0] += prior[0];
+                    e[1] += prior[1];
                 }
             }
             if room_seen[i] {
@@ -863,27 +925,64 @@ impl Segmenter {
             && self.previous.is_none()
             && self.options.adapt_rate > 0.0
         {
-            // The first frame of a stream: no background seen yet. Segment it once to learn the
-            // room's colours away from the person, then again with them, each pass learning
-            // more (the room pixel by pixel, the person's own head and shoe colours), until the
-            // mask stops changing or the passes run out.
-            let mut last = self.segment_once(frame);
-            for pass in 2..=self.options.first_frame_passes {
-                self.previous = None;
-                self.previous_mask = None;
-                self.before_previous_mask = None;
-                let mut next = self.segment_once(frame);
-                next.times += last.times;
-                next.passes = pass;
-                let settled = next.mask == last.mask;
-                last = next;
-                if settled {
-                    break;
-                }
+            // The first frame of a stream: no background seen yet.
+            let first = self.segment_first(frame);
+            if !self.suit_left_out() {
+                return first;
             }
-            return last;
+            // Most of what looks like the suit was left out: the label prior, which says most
+            // of a frame is room, outweighed colours that tell this suit from this room by
+            // little, and the room learned from that mask holds the suit. Start the stream
+            // again without the prior.
+            self.reset();
+            self.label_prior_off = true;
+            let mut again = self.segment_first(frame);
+            self.label_prior_off = false;
+            again.times += first.times;
+            again.passes += first.passes;
+            return again;
         }
         self.segment_once(frame)
+    }
+
+    /// A stream's first frame: segmented once to learn the room's colours away from the person,
+    /// then again with them, each pass learning more (the room pixel by pixel, the person's own
+    /// head and shoe colours), until the mask stops changing or the passes run out.
+    fn segment_first(&mut self, frame: &RgbImage) -> Segmentation {
+        let mut last = self.segment_once(frame);
+        for pass in 2..=self.options.first_frame_passes {
+            self.previous = None;
+            self.previous_mask = None;
+            self.before_previous_mask = None;
+            let mut next = self.segment_once(frame);
+            next.times += last.times;
+            next.passes = pass;
+            let settled = next.mask == last.mask;
+            last = next;
+            if settled {
+                break;
+            }
+        }
+        last
+    }
+
+    /// Whether the frame just segmented left out of its suit (the cleaned cut) more than
+    /// [`FIRST_FRAME_MAX_LEFT_OUT`] of its pixels that look like the suit (cloth or a marker's
+    /// colour within the suit's interleaving of the two, [`looks_like_suit`]), when they are at
+    /// least a person's least area ([`SegmenterOptions::min_person_fraction`]).
+    fn suit_left_out(&self) -> bool {
+        let (Some(features), Some(suit)) = (&self.previous, &self.previous_mask) else {
+            return false;
+        };
+        let (mut like, mut inside) = (0usize, 0usize);
+        for (i, &s) in suit.iter().enumerate() {
+            if looks_like_suit(features, &self.gate, i) {
+                like += 1;
+                inside += s as usize;
+            }
+        }
+        let least = self.options.min_person_fraction * suit.len() as f32;
+        like as f32 >= least && (like - inside) as f32 > FIRST_FRAME_MAX_LEFT_OUT * like as f32
     }
 
     fn segment_once(&mut self, frame: &RgbImage) -> Segmentation {
@@ -1124,7 +1223,36 @@ impl Segmenter {
         } else {
             (0, 0)
         };
+        // Where the suit's arms end: the hands' ellipses, kept for the last look below.
+        let hand_px_per_cm = suit_rows.len() as f32 / SUIT_HEIGHT_CM;
+        self.hand_prior.clear();
+        self.hand_prior.resize(w * h, false);
+        let hand_ends = if may_look && self.options.hand_look > 0.0 {
+            arm_ends(
+                labels,
+                w,
+                suit_rows.clone(),
+                hand_px_per_cm,
+                &mut self.arm_scratch,
+            )
+        } else {
+            Vec::new()
+        };
+        // Each hand's pixels (its ellipse outside the suit).
+        let hands: Vec<Vec<usize>> = hand_ends
+            .iter()
+            .map(|end| {
+                let mut pixels = Vec::new();
+                hand_pixels(labels, w, end, hand_px_per_cm, &mut pixels);
+                for &i in &pixels {
+                    self.hand_prior[i] = true;
+                }
+                pixels
+            })
+            .collect();
+        let hand_look = self.options.hand_look;
         let (head_prior, shoe_prior) = (&self.head_prior, &self.shoe_prior);
+        let hand_prior = &self.hand_prior;
         let part_like_looking = |remember: bool, looking: bool| {
             move |i: usize| {
                 if room_seen[i] {
@@ -1137,6 +1265,10 @@ impl Segmenter {
                     0.0
                 } + if looking && (head_prior[i] || shoe_prior[i]) {
                     part_look
+                } else {
+                    0.0
+                } + if looking && hand_prior[i] {
+                    hand_look
                 } else {
                     0.0
                 };
@@ -1194,7 +1326,20 @@ impl Segmenter {
         let below = &below[(suit_rows.len() * w).min(below.len())..];
         let look_head = lacking(above, head_expected);
         let look_shoes = lacking(below, shoes_expected);
-        if look_head || look_shoes {
+        // The hands of which less than a share of their ellipse was found.
+        self.hand_marks.clear();
+        self.hand_marks.resize(w * h, false);
+        let mut look_hands = false;
+        for pixels in &hands {
+            let found = pixels.iter().filter(|&&i| self.part[i]).count();
+            if (found as f32) < HAND_FOUND_SHARE * pixels.len() as f32 {
+                look_hands = true;
+                for &i in pixels {
+                    self.hand_marks[i] = true;
+                }
+            }
+        }
+        if look_head || look_shoes || look_hands {
             let (look_person, look_part) = &mut self.look_parts;
             look_person.clone_from(&person);
             self.look_band.clear();
@@ -1202,7 +1347,10 @@ impl Segmenter {
                 self.band
                     .iter()
                     .zip(head_prior.iter().zip(shoe_prior.iter()))
-                    .map(|(&b, (&head, &shoe))| b && ((look_head && head) || (look_shoes && shoe))),
+                    .zip(self.hand_marks.iter())
+                    .map(|((&b, (&head, &shoe)), &hand)| {
+                        b && ((look_head && head) || (look_shoes && shoe) || hand)
+                    }),
             );
             attach_parts(
                 look_person,

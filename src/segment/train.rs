@@ -643,6 +643,36 @@ mod tests {
     }
 
     #[test]
+    fn a_first_frame_weighs_the_label_prior_by_its_share() {
+        // Without history a pixel's person cost minus its background cost holds the label
+        // prior's difference σ_T·(prior[1] − prior[0]) at the share given: at 1 the whole of it,
+        // at 0.5 half, at 0 none; every other term is the same.
+        let frames = synthetic_frames(12);
+        let (tables, _) = trained_on_the_first_ten(&frames);
+        let full = tables.weights.temporal * (tables.prior[1] - tables.prior[0]);
+        assert!(full.abs() > 0.1, "{full}");
+        let margins = |share: f32| {
+            let options = SegmenterOptions {
+                label_prior_share: share,
+                ..SegmenterOptions::default()
+            };
+            let mut seg = Segmenter::new(tables.clone(), &suit(), options);
+            seg.build_graph(&frames[10].image);
+            let g = seg.graph();
+            g.sink()
+                .iter()
+                .zip(g.source())
+                .map(|(t, s)| t - s)
+                .collect::<Vec<f32>>()
+        };
+        let (none, half, whole) = (margins(0.0), margins(0.5), margins(1.0));
+        for ((n, h), w) in none.iter().zip(&half).zip(&whole) {
+            assert!((h - n - 0.5 * full).abs() < 1e-3, "{n} {h} {full}");
+            assert!((w - n - full).abs() < 1e-3, "{n} {w} {full}");
+        }
+    }
+
+    #[test]
     fn the_flow_is_the_cost_of_the_cut_it_returns() {
         let frames = synthetic_frames(6);
         let (tables, _) = train_segmenter(&frames, &suit(), 2, 0, &[], WeightSearch::Pairs, |_| {})
