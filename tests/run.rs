@@ -304,15 +304,18 @@ fn exemplars_are_written_for_a_trained_suit_and_recorded_in_its_manifest() {
     );
     let data = generated_clip(&tmp.path().join("clip"));
     let train = Path::new(env!("CARGO_BIN_EXE_suitcap")).with_file_name("suitcap-train");
-    let printed = succeeded(
-        Command::new(&train)
-            .args(["exemplars", "--suit"])
-            .arg(&suit)
-            .arg("--data")
-            .arg(&data)
-            .output()
-            .expect("runs"),
-    );
+    let write_exemplars = || {
+        succeeded(
+            Command::new(&train)
+                .args(["exemplars", "--suit"])
+                .arg(&suit)
+                .arg("--data")
+                .arg(&data)
+                .output()
+                .expect("runs"),
+        )
+    };
+    let printed = write_exemplars();
     // Twelve frames with the person: every 8th, frames 0 and 8.
     assert!(
         printed.starts_with("2 exemplars (every 8th of 12 training frames"),
@@ -335,15 +338,7 @@ fn exemplars_are_written_for_a_trained_suit_and_recorded_in_its_manifest() {
     assert!(!broken.status.success());
     let stderr = String::from_utf8_lossy(&broken.stderr);
     assert!(stderr.contains("exemplars.bin"), "{stderr}");
-    succeeded(
-        Command::new(&train)
-            .args(["exemplars", "--suit"])
-            .arg(&suit)
-            .arg("--data")
-            .arg(&data)
-            .output()
-            .expect("runs"),
-    );
+    write_exemplars();
     assert_eq!(check(), after);
 }
 

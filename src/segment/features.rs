@@ -401,8 +401,20 @@ pub const SUIT_RADIUS: u16 = 2;
 /// seeing the suit's mixed pattern around it (the seeds of [`suit_support`])?
 #[inline]
 pub fn is_pattern_seed(features: &FrameFeatures, gate: &MarkerGate, i: usize) -> bool {
+    shows_suit_pattern(features, gate, i, 1)
+}
+
+/// Is pixel `i` of `features` of the cloth's or a marker's colour within the suit's interleaving
+/// of the two with at least `share` (a pattern class 1–4, see [`is_suit_pattern`])?
+#[inline]
+pub fn shows_suit_pattern(
+    features: &FrameFeatures,
+    gate: &MarkerGate,
+    i: usize,
+    share: u8,
+) -> bool {
     let c = features.colour[i];
-    is_suit_pattern(features.pattern[i], 1) && (gate.is_cloth(c) || gate.is_marker(c))
+    is_suit_pattern(features.pattern[i], share) && (gate.is_cloth(c) || gate.is_marker(c))
 }
 
 /// Is pixel `i` of `features` of the cloth's or a marker's colour with the other half of the

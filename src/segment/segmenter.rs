@@ -77,9 +77,9 @@ use super::cleanup::{
     PART_REACH,
 };
 use super::features::{
-    colour_index, contrast_bin, downscale, is_near_pattern, is_suit_pattern, temporal_bin,
-    temporal_difference, ColourLut, FrameFeatures, MarkerGate, COLOUR_BINS, PATTERN_CLASSES,
-    TEMPORAL_BINS,
+    colour_index, contrast_bin, downscale, is_near_pattern, is_suit_pattern, shows_suit_pattern,
+    temporal_bin, temporal_difference, ColourLut, FrameFeatures, MarkerGate, COLOUR_BINS,
+    PATTERN_CLASSES, TEMPORAL_BINS,
 };
 use super::hands::{arm_ends, hand_pixels, ArmScratch, SUIT_HEIGHT_CM};
 use super::maxflow::{GridGraph, GridMaxFlow};
@@ -320,13 +320,6 @@ pub const SUIT_HOLE_MIN_SHARE: f32 = 0.8;
 /// front of a room keeps nearly all of them (the room rarely holds the suit's interleaving of cloth
 /// and markers); a first frame the prior hid keeps a few percent.
 pub const FIRST_FRAME_MAX_LEFT_OUT: f32 = 0.5;
-
-/// Whether pixel `i` of `features` looks like the suit: cloth or a marker's colour within the
-/// suit's interleaving of the two.
-fn looks_like_suit(features: &FrameFeatures, gate: &MarkerGate, i: usize) -> bool {
-    let c = features.colour[i];
-    is_suit_pattern(features.pattern[i], 3) && (gate.is_cloth(c) || gate.is_marker(c))
-}
 
 /// The share of a hand's expected ellipse that the part test must have found for the hand to
 /// count as found; less, and the last look floods the ellipse ([`SegmenterOptions::hand_look`]).
@@ -968,15 +961,15 @@ impl Segmenter {
 
     /// Whether the frame just segmented left out of its suit (the cleaned cut) more than
     /// [`FIRST_FRAME_MAX_LEFT_OUT`] of its pixels that look like the suit (cloth or a marker's
-    /// colour within the suit's interleaving of the two, [`looks_like_suit`]), when they are at
-    /// least a person's least area ([`SegmenterOptions::min_person_fraction`]).
+    /// colour within the suit's interleaving of the two, [`shows_suit_pattern`] from class 3),
+    /// when they are at least a person's least area ([`SegmenterOptions::min_person_fraction`]).
     fn suit_left_out(&self) -> bool {
         let (Some(features), Some(suit)) = (&self.previous, &self.previous_mask) else {
             return false;
         };
         let (mut like, mut inside) = (0usize, 0usize);
         for (i, &s) in suit.iter().enumerate() {
-            if looks_like_suit(features, &self.gate, i) {
+            if shows_suit_pattern(features, &self.gate, i, 3) {
                 like += 1;
                 inside += s as usize;
             }

@@ -1160,9 +1160,7 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
             .collect::<anyhow::Result<_>>()?,
         files: suitcap::manifest::record_files(suit_dir)?,
     };
-    let path = suit_dir.join(MANIFEST_FILE);
-    suitcap::io::write_atomic(&path, manifest.to_toml()?.as_bytes())
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    write_manifest(suit_dir, &manifest)?;
     println!(
         "suit trained in {:.1} s: {} frames, {} candidates, {} relevance vectors, kernel width {width:.4}, noise σ² {:.5}, RVM {:.1} s ({} iterations); written to {}",
         started.elapsed().as_secs_f64(),
@@ -1175,6 +1173,13 @@ fn train_suit(suit_dir: &Path, data: &[PathBuf], run: &SuitRun) -> anyhow::Resul
         suit_dir.display()
     );
     Ok(())
+}
+
+/// Writes `manifest` as the suit's `model.toml`, in one step (a stopped write leaves the old one).
+fn write_manifest(suit_dir: &Path, manifest: &Manifest) -> anyhow::Result<()> {
+    let path = suit_dir.join(MANIFEST_FILE);
+    suitcap::io::write_atomic(&path, manifest.to_toml()?.as_bytes())
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Writes a trained suit's exemplars from the datasets it was trained on (see
@@ -1203,9 +1208,7 @@ fn exemplars(suit_dir: &Path, data: &[PathBuf], masks: TrainingMasks) -> anyhow:
     // A suit without a manifest (hand-assembled) stays without one.
     if let Some(mut manifest) = Manifest::load(suit_dir)? {
         manifest.files = record_files(suit_dir)?;
-        let path = suit_dir.join(MANIFEST_FILE);
-        suitcap::io::write_atomic(&path, manifest.to_toml()?.as_bytes())
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        write_manifest(suit_dir, &manifest)?;
     }
     println!(
         "{} exemplars (every {}th of {} training frames, {} nearest averaged, share {}) in {:.1} s → {}",
