@@ -156,6 +156,12 @@ enum Command {
         /// for comparisons).
         #[arg(long)]
         no_room: bool,
+        /// A pixel of the band around the suit where heads, hands and shoes are looked for is
+        /// kept out of the room's learning if its colour is likelier a part's than the room's by
+        /// more than this many nats (default 1; `--room-band-odds=-inf` keeps the whole band
+        /// out, as before the tenth session of 2026-12-07).
+        #[arg(long)]
+        room_band_odds: Option<f32>,
         /// Also write the graph of this frame index as GCG1 (to compare solvers).
         #[arg(long, requires = "graph_out")]
         dump_graph: Option<u64>,
@@ -560,12 +566,13 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
 /// looks for a head and shoes and for hands (nats), the share of the person's own part colours,
 /// the edge snapping's room share for marker colours, the cloth's reach from the markers (cm),
 /// the passes over a stream's first frame and the label prior's share in its first two frames,
-/// the room model (`no_room`: off), the outline's unmixing (`no_unmix`: off) and the largest hole
-/// of the suit's colours filled (markers' areas).
+/// the room model (`no_room`: off) and the part odds above which its band is kept out of it, the
+/// outline's unmixing (`no_unmix`: off) and the largest hole of the suit's colours filled
+/// (markers' areas).
 fn segmenter_options(
     (part_memory, part_look, hand_look): (Option<f32>, Option<f32>, Option<f32>),
     part_colours: Option<f32>,
-    (keep_room_share, suit_holes): (Option<f32>, Option<f32>),
+    (keep_room_share, suit_holes, room_band_odds): (Option<f32>, Option<f32>, Option<f32>),
     (cloth_reach, first_frame_passes, label_prior_share): (Option<f32>, Option<u32>, Option<f32>),
     (no_room, no_unmix): (bool, bool),
 ) -> anyhow::Result<SegmenterOptions> {
@@ -575,6 +582,14 @@ fn segmenter_options(
             bail!("--first-frame-passes: 0 is not a number of passes (1 or more)");
         }
         options.first_frame_passes = passes;
+    }
+    if let Some(odds) = room_band_odds {
+        if odds.is_nan() {
+            bail!("--room-band-odds: NaN is not a number of nats");
+        }
+        if let Some(room) = &mut options.room {
+            room.band_part_odds = odds;
+        }
     }
     if no_room {
         options.room = None;
@@ -753,6 +768,10 @@ fn segment(
             stage_median(&|t| t.total())
         );
     }
+    // Frames whose truth has nobody are reported apart: their IoU is 1 or 0, and would hide the
+    // person frames' figures.
+    let (scored, nobody): (Vec<_>, Vec<_>) =
+        scored.into_iter().partition(|(a, _)| a.both + a.missed > 0);
     if !scored.is_empty() {
         let n = scored.len() as f64;
         let mean = scored.iter().map(|(a, _)| a.iou()).sum::<f64>() / n;
@@ -772,6 +791,20 @@ fn segment(
             worst.1,
             100.0 * missed / n,
             100.0 * extra / n,
+        );
+    }
+    if !nobody.is_empty() {
+        let empty = nobody.iter().filter(|(a, _)| a.extra == 0).count();
+        let most = nobody
+            .iter()
+            .max_by_key(|(a, _)| a.extra)
+            .map(|(a, name)| format!("; at most {} ({name})", a.extra))
+            .filter(|_| empty < nobody.len())
+            .unwrap_or_default();
+        println!(
+            "{} with nobody in the truth (not in the IoU): {empty} given an empty mask, {} person pixels{most}",
+            cli::counted(nobody.len(), "frame", "frames"),
+            nobody.iter().map(|(a, _)| a.extra).sum::<usize>(),
         );
     }
     if let Some(truth) = truth.filter(|_| unscored > 0) {
@@ -1046,12 +1079,13 @@ fn main() -> ExitCode {
             suit_holes,
             no_unmix,
             no_room,
+            room_band_odds,
             dump_graph,
             graph_out,
         } => segmenter_options(
             (*part_memory, *part_look, *hand_look),
             *part_colours,
-            (*keep_room_share, *suit_holes),
+            (*keep_room_share, *suit_holes, *room_band_odds),
             (*cloth_reach, *first_frame_passes, *label_prior_share),
             (*no_room, *no_unmix),
         )

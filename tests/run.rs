@@ -512,6 +512,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         ("outline not unmixed", &["--no-unmix"][..]),
         ("first frame once", &["--first-frame-passes", "1"][..]),
         ("no suit holes filled", &["--suit-holes", "0"][..]),
+        ("band kept out of the room", &["--room-band-odds=-inf"][..]),
     ] {
         let out = tmp.path().join(name);
         let report = succeeded(segment(&out, &all_masks, extra));
@@ -528,6 +529,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         (&["--cloth-reach=-24"][..], "--cloth-reach"),
         (&["--first-frame-passes", "0"][..], "--first-frame-passes"),
         (&["--suit-holes=-2"][..], "--suit-holes"),
+        (&["--room-band-odds", "NaN"][..], "--room-band-odds"),
     ] {
         let output = segment(&out, &all_masks, bad);
         assert!(!output.status.success(), "{bad:?}");
@@ -553,9 +555,21 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         let name = format!("{k:06}.png");
         std::fs::copy(data.join("masks").join(&name), few.join(&name)).expect("copy");
     }
+    // One of them labelled as nobody: reported apart from the IoU, with what the segmenter found.
+    let labelled = image::open(few.join("000003.png"))
+        .expect("mask")
+        .to_luma8();
+    image::GrayImage::new(labelled.width(), labelled.height())
+        .save(few.join("000003.png"))
+        .expect("empty mask");
     let report = succeeded(segment(&tmp.path().join("few"), &few, &[]));
     assert!(
         report.contains("IoU against") && report.contains("7 frames not scored"),
+        "{report}"
+    );
+    assert!(
+        report.contains("1 frame with nobody in the truth (not in the IoU): 0 given an empty mask")
+            && report.contains("(000003.png)"),
         "{report}"
     );
     // A truth mask of another size is named, not scored as if it fitted.

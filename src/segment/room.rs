@@ -11,10 +11,11 @@
 //! after this frame's overall brightness is matched to the model's ([`RoomModel::gain`]), so a
 //! light turned up or down does not make the whole room look new. A pixel never learned is
 //! unknown and left to the colour tables; so is anything that moves in the room (it does not show
-//! its running mean) and a room seen by a moving camera. The segmenter learns only pixels beyond
-//! the band in which heads, hands and shoes are looked for (a head the part test missed would
-//! otherwise be learned as room where it stands, and then never be found again), and forgets the
-//! model when it is reset (a new stream, or the camera moved).
+//! its running mean) and a room seen by a moving camera. Within the band in which heads, hands and
+//! shoes are looked for, the segmenter learns only pixels whose colour is not a part's (a head the
+//! part test missed would otherwise be learned as room where it stands, and then never be found
+//! again; [`RoomSettings::band_part_odds`]), and forgets the model when it is reset (a new stream,
+//! or the camera moved).
 //!
 //! Gives the segmenter two things: a band pixel that shows the room is not a part, and the cut
 //! counts a pixel that shows the room [`RoomSettings::cut_bonus`] nats likelier background.
@@ -46,6 +47,13 @@ pub struct RoomSettings {
     /// How much likelier (nats, on the background's energy) the cut counts a pixel that shows
     /// the room to be background.
     pub cut_bonus: f32,
+    /// Within the band around the suit where heads, hands and shoes are looked for, a pixel is
+    /// learned only if its colour is not likelier a part's than the room's (the segmenter's
+    /// part and background colour likelihoods, nats) by more than this: a head the part test
+    /// missed, learned as room where it stands, would never be found there again, but the room
+    /// between the legs and beside the arms, which the person never leaves for long, would
+    /// otherwise never be learned. `f32::NEG_INFINITY`: the band is never learned.
+    pub band_part_odds: f32,
 }
 
 impl Default for RoomSettings {
@@ -58,13 +66,17 @@ impl Default for RoomSettings {
     /// 20, so that where the room has the suit's colour the suit's own pattern can still win the
     /// cut (above 5 the gain was 0.0004). A pixel that differs from the room counted as a part
     /// (channel difference over 40 or 80) lost 0.027 and 0.019: clutter, light and shadows differ
-    /// from the room too.
+    /// from the room too. The band's part odds, on the 24 selection renderings
+    /// (docs/measurements.md, tenth session of 2026-12-07; the band kept out 0.9507): −4 / −2 /
+    /// −1 / 0 / **1** / 2 / 3 / 5 nats gave 0.9510 / 0.9528 / 0.9537 / 0.9537 / **0.9544** /
+    /// 0.9540 / 0.9538 / 0.9531.
     fn default() -> RoomSettings {
         RoomSettings {
             rate: 0.1,
             min_frames: 2,
             tolerance: 10.0,
             cut_bonus: 5.0,
+            band_part_odds: 1.0,
         }
     }
 }
@@ -207,6 +219,7 @@ mod tests {
         min_frames: 2,
         tolerance: 10.0,
         cut_bonus: 5.0,
+        band_part_odds: 1.0,
     };
 
     #[test]

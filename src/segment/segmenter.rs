@@ -22,7 +22,8 @@
 //!    [`SegmenterOptions::adapt_rate`] per frame), as bilayer segmenters do: the 20 training frames
 //!    cannot show the room the suit will be used in, the stream itself does after one frame; and
 //!    a pixel that shows what it showed while the person was elsewhere (the room learned pixel by
-//!    pixel from those pixels beyond the part band, [`room`](super::room),
+//!    pixel from those pixels, within the part band only those of no part's colour,
+//!    [`room`](super::room),
 //!    [`SegmenterOptions::room`]) counts as likelier background;
 //! 4. keeps the connected region that carries the most suit cloth next to markers, with the pieces of
 //!    suit near it that an arm or an object in front cut off ([`SegmenterOptions::piece_reach`]), fills
@@ -724,7 +725,8 @@ impl Segmenter {
 
     /// Learns the background colours of this frame from pixels well away from the person and
     /// refreshes the background colour likelihood for the next frame; learns the room pixel by
-    /// pixel from those of them beyond the part band.
+    /// pixel from those of them beyond the part band, and from those within it whose colour is
+    /// not a part's ([`RoomSettings::band_part_odds`]).
     fn adapt_background(&mut self, labels: &[bool]) {
         let o = self.options;
         if o.adapt_rate <= 0.0 && o.room.is_none() {
@@ -736,6 +738,7 @@ impl Segmenter {
         let margin = o.adapt_margin as usize;
         let near = distance_near(labels, w, h, margin + 1, &mut self.distance);
         let mut histogram = BinHistogram::new();
+        let band_part_odds = o.room.map_or(f32::NEG_INFINITY, |r| r.band_part_odds);
         self.far.clear();
         for y in 0..h {
             for x in 0..w {
@@ -750,9 +753,15 @@ impl Segmenter {
                     histogram.add(self.features.colour[i].bin);
                 }
                 // A head the part test missed lies within the band: learned as room, it would
-                // never be found there again.
-                self.far
-                    .push(far && !self.band.get(i).copied().unwrap_or(false));
+                // never be found there again. So a band pixel is learned only if its colour is
+                // not likelier a part's than the room's by more than the odds.
+                let in_band = self.band.get(i).copied().unwrap_or(false);
+                let part_like = || {
+                    let bin = self.features.colour[i].bin as usize;
+                    let part = self.part_bin[bin].min(self.hand_bin[bin]);
+                    self.background_bin[bin] - part > band_part_odds
+                };
+                self.far.push(far && !(in_band && part_like()));
             }
         }
         if let Some(settings) = &o.room {
@@ -821,6 +830,11 @@ impl Segmenter {
     /// The graph of the last frame, e.g. to dump it as GCG1 and compare solvers.
     pub fn graph(&self) -> &GridGraph {
         &self.graph
+    }
+
+    /// The room learned so far, pixel by pixel on the cut's grid.
+    pub fn room(&self) -> &RoomModel {
+        &self.room
     }
 
     fn fill_graph(&mut self) {

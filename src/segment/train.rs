@@ -520,6 +520,7 @@ pub fn train_segmenter(
 
 #[cfg(test)]
 mod tests {
+    use super::super::room::RoomSettings;
     use super::*;
     use crate::suit::shipped_default as suit;
 
@@ -670,6 +671,50 @@ mod tests {
             assert!((h - n - 0.5 * full).abs() < 1e-3, "{n} {h} {full}");
             assert!((w - n - full).abs() < 1e-3, "{n} {w} {full}");
         }
+    }
+
+    #[test]
+    fn the_room_beside_the_person_is_learned_unless_its_colour_may_be_a_parts() {
+        // The square stands still; the ring 5–6 pixels beside it (its corners left out) lies beyond the margin of the
+        // room's learning (4) but within the part band (a fifth of its 30 rows). Its colours,
+        // the room's checkerboard, are no part's: learned at the default odds, not when the band
+        // is kept out whatever its colour, nor when odds of −1000 nats count every colour as a
+        // part's.
+        let still: Vec<TrainingFrame> = synthetic_frames(12)
+            .into_iter()
+            .map(|_| synthetic_frames(1).remove(0))
+            .collect();
+        let (tables, _) = trained_on_the_first_ten(&still);
+        let known_in_ring = |odds: f32| {
+            let room = RoomSettings {
+                band_part_odds: odds,
+                ..RoomSettings::default()
+            };
+            let options = SegmenterOptions {
+                room: Some(room),
+                ..SegmenterOptions::default()
+            };
+            let mut seg = Segmenter::new(tables.clone(), &suit(), options);
+            for frame in &still[..4] {
+                seg.segment(&frame.image);
+            }
+            let (w, h) = (64usize, 48usize);
+            let near = |x: usize, y: usize, d: usize| {
+                (20usize.saturating_sub(d)..40 + d).contains(&x)
+                    && (10usize.saturating_sub(d)..40 + d).contains(&y)
+            };
+            (0..w * h)
+                .filter(|&i| {
+                    let (x, y) = (i % w, i / w);
+                    let beside = (20..40).contains(&x) || (10..40).contains(&y);
+                    beside && near(x, y, 6) && !near(x, y, 4) && seg.room().knows(i, &room)
+                })
+                .count()
+        };
+        let default = known_in_ring(1.0);
+        assert!(default > 100, "{default}");
+        assert_eq!(known_in_ring(f32::NEG_INFINITY), 0);
+        assert_eq!(known_in_ring(-1000.0), 0);
     }
 
     #[test]

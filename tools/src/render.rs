@@ -74,7 +74,8 @@ impl BodyLayer {
         }
     }
 
-    fn clear(&mut self) {
+    /// Nothing drawn: every pixel the room's.
+    pub fn clear(&mut self) {
         self.depth.clear(self.width, self.height);
         self.marker.fill(NO_MARKER);
     }

@@ -8,6 +8,7 @@
 //! so the output is byte-identical for a given seed whatever the thread count), and writes frames,
 //! masks, `motion.bvh`, `camera.toml`, `markers.csv` and, last, `manifest.toml`.
 
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -52,6 +53,9 @@ pub struct SynthOptions {
     pub overwrite: bool,
     /// The command line, recorded in the manifest.
     pub command: String,
+    /// Frame ranges rendered without the person (the room and its clutter only, an empty mask, no
+    /// markers): someone who steps into view after the camera started, or leaves and comes back.
+    pub absent: Vec<Range<usize>>,
 }
 
 impl SynthOptions {
@@ -73,6 +77,7 @@ impl SynthOptions {
             seed: 1,
             overwrite: false,
             command: String::new(),
+            absent: Vec::new(),
         }
     }
 }
@@ -273,6 +278,18 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
     if resampled.frame_count() == 0 {
         bail!("{}: no frames to render", options.bvh.display());
     }
+    if let Some(r) = options
+        .absent
+        .iter()
+        .find(|r| r.start >= resampled.frame_count())
+    {
+        bail!(
+            "--absent {}..{}: the clip gives only {} frames",
+            r.start,
+            r.end,
+            resampled.frame_count()
+        );
+    }
     let skeleton = subject.scale_skeleton(&clip.skeleton);
     let motion = resampled.with_skeleton(skeleton.clone(), |frame| {
         subject.scale_root_translation(&clip.skeleton, frame)
@@ -390,7 +407,11 @@ pub fn generate(options: &SynthOptions, progress: &(dyn Fn() + Sync)) -> anyhow:
                     ambient: scene.ambient,
                     exposure: scene.exposure,
                 };
-                renderer.draw(world, &lighting, layer);
+                if options.absent.iter().any(|r| r.contains(&k)) {
+                    layer.clear();
+                } else {
+                    renderer.draw(world, &lighting, layer);
+                }
                 background.clear();
                 background.extend_from_slice(plates.at(t));
                 for object in &clutter {

@@ -110,6 +110,54 @@ fn the_dataset_reopens_and_is_aligned_with_the_clip() {
 }
 
 #[test]
+fn absent_frames_show_the_room_alone() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (with, without) = (tmp.path().join("with"), tmp.path().join("without"));
+    generate(&options(&with, 4), &|| {}).expect("person throughout");
+    let absent = SynthOptions {
+        absent: vec![0..2, 4..5],
+        ..options(&without, 4)
+    };
+    generate(&absent, &|| {}).expect("person absent in frames 0, 1 and 4");
+    let (a, b) = (
+        Dataset::open(&with).expect("opens"),
+        Dataset::open(&without).expect("opens"),
+    );
+    let person = |d: &Dataset, k: usize| {
+        let mask = image::open(d.mask_path(k)).expect("mask").to_luma8();
+        mask.pixels().filter(|p| p.0[0] == 255).count()
+    };
+    let marked: Vec<usize> = b
+        .markers()
+        .expect("markers")
+        .iter()
+        .map(|m| m.frame)
+        .collect();
+    for k in 0..6 {
+        let gone = [0, 1, 4].contains(&k);
+        assert_eq!(person(&b, k) == 0, gone, "frame {k}");
+        assert_eq!(marked.contains(&k), !gone, "frame {k}");
+        assert_eq!(
+            person(&b, k),
+            if gone { 0 } else { person(&a, k) },
+            "frame {k}"
+        );
+        // Where the person is, the frame is the one rendered with them throughout.
+        let frame = |d: &Dataset| std::fs::read(d.frame_path(k)).expect("frame");
+        assert_eq!(frame(&a) == frame(&b), !gone, "frame {k}");
+    }
+    let late = SynthOptions {
+        absent: vec![std::ops::Range { start: 6, end: 9 }],
+        ..options(&tmp.path().join("late"), 4)
+    };
+    let err = format!("{:#}", generate(&late, &|| {}).expect_err("past the end"));
+    assert!(
+        err.contains("--absent 6..9") && err.contains("6 frames"),
+        "{err}"
+    );
+}
+
+#[test]
 fn bad_clips_are_clear_errors() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let text = std::fs::read_to_string(repo("tests/data/mocap/cmu_09_01_run.bvh")).expect("clip");

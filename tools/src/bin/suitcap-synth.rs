@@ -1,6 +1,7 @@
 //! `suitcap-synth`: renders a person in the marker suit, driven by a BVH clip, over real backgrounds,
 //! and writes a mocap-aligned dataset (frames, masks, motion.bvh, camera.toml, markers.csv, manifest.toml).
 
+use std::ops::Range;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -55,6 +56,26 @@ struct Args {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// Frames rendered without the person, as FIRST..END (END not included; repeatable): the room
+    /// alone, an empty mask. E.g. `--absent 0..20` for someone who steps into view at frame 20.
+    #[arg(long, value_parser = parse_range)]
+    absent: Vec<Range<usize>>,
+}
+
+fn parse_range(text: &str) -> Result<Range<usize>, String> {
+    let (a, b) = text
+        .split_once("..")
+        .ok_or_else(|| format!("--absent '{text}' is not FIRST..END"))?;
+    let first = a
+        .parse::<usize>()
+        .map_err(|_| format!("--absent '{text}': bad first frame"))?;
+    let end = b
+        .parse::<usize>()
+        .map_err(|_| format!("--absent '{text}': bad end frame"))?;
+    if end <= first {
+        return Err(format!("--absent '{text}': END must be after FIRST"));
+    }
+    Ok(first..end)
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
@@ -97,6 +118,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         seed: args.seed,
         overwrite: args.overwrite,
         command,
+        absent: args.absent,
     };
     let bar = ProgressBar::new(args.frames.unwrap_or(0) as u64);
     bar.set_style(
