@@ -156,6 +156,11 @@ enum Command {
         /// for comparisons).
         #[arg(long)]
         no_room: bool,
+        /// Without a second look, free of the history, at a frame whose mask came out empty
+        /// while much of it looks like the suit (as before the tenth session of 2026-12-07; for
+        /// comparisons).
+        #[arg(long)]
+        no_lost_retry: bool,
         /// A pixel of the band around the suit where heads, hands and shoes are looked for is
         /// kept out of the room's learning if its colour is likelier a part's than the room's by
         /// more than this many nats (default 1; `--room-band-odds=-inf` keeps the whole band
@@ -567,14 +572,14 @@ fn output_names(input: &str) -> anyhow::Result<Option<Vec<String>>> {
 /// the edge snapping's room share for marker colours, the cloth's reach from the markers (cm),
 /// the passes over a stream's first frame and the label prior's share in its first two frames,
 /// the room model (`no_room`: off) and the part odds above which its band is kept out of it, the
-/// outline's unmixing (`no_unmix`: off) and the largest hole of the suit's colours filled
-/// (markers' areas).
+/// outline's unmixing (`no_unmix`: off), the second look at a frame found empty (`no_lost_retry`:
+/// off) and the largest hole of the suit's colours filled (markers' areas).
 fn segmenter_options(
     (part_memory, part_look, hand_look): (Option<f32>, Option<f32>, Option<f32>),
     part_colours: Option<f32>,
     (keep_room_share, suit_holes, room_band_odds): (Option<f32>, Option<f32>, Option<f32>),
     (cloth_reach, first_frame_passes, label_prior_share): (Option<f32>, Option<u32>, Option<f32>),
-    (no_room, no_unmix): (bool, bool),
+    (no_room, no_unmix, no_lost_retry): (bool, bool, bool),
 ) -> anyhow::Result<SegmenterOptions> {
     let mut options = SegmenterOptions::default();
     if let Some(passes) = first_frame_passes {
@@ -597,6 +602,7 @@ fn segmenter_options(
     if no_unmix {
         options.unmix = None;
     }
+    options.lost_person_retry = !no_lost_retry;
     // `flag`'s value if it is finite and not negative, else an error naming the flag.
     let at_least_zero = |flag: &str, value: f32, what: &str| {
         if value.is_finite() && value >= 0.0 {
@@ -1079,6 +1085,7 @@ fn main() -> ExitCode {
             suit_holes,
             no_unmix,
             no_room,
+            no_lost_retry,
             room_band_odds,
             dump_graph,
             graph_out,
@@ -1087,7 +1094,7 @@ fn main() -> ExitCode {
             *part_colours,
             (*keep_room_share, *suit_holes, *room_band_odds),
             (*cloth_reach, *first_frame_passes, *label_prior_share),
-            (*no_room, *no_unmix),
+            (*no_room, *no_unmix, *no_lost_retry),
         )
         .and_then(|options| {
             segment(

@@ -513,6 +513,7 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         ("first frame once", &["--first-frame-passes", "1"][..]),
         ("no suit holes filled", &["--suit-holes", "0"][..]),
         ("band kept out of the room", &["--room-band-odds=-inf"][..]),
+        ("no second look when empty", &["--no-lost-retry"][..]),
     ] {
         let out = tmp.path().join(name);
         let report = succeeded(segment(&out, &all_masks, extra));

@@ -10,7 +10,9 @@
 //!    mask settles, each pass learning the room from the one before
 //!    ([`SegmenterOptions::first_frame_passes`]), and from scratch without the prior if its suit
 //!    left out most of what looks like the suit ([`FIRST_FRAME_MAX_LEFT_OUT`]); the second uses
-//!    the motion term and that prior),
+//!    the motion term and that prior; a later frame found empty while most of what looks like
+//!    the suit was left out is segmented again without the history,
+//!    [`SegmenterOptions::lost_person_retry`]),
 //!    pairwise weights from the neighbourhood table on the four
 //!    axial edges (a label-pair energy A, B, D becomes an edge weight (2B − A − D)/2; the (D − A)/2 it
 //!    would add to both nodes' person cost is left out, see [`Segmenter::new`]). The cut looks for the
@@ -158,6 +160,15 @@ pub struct SegmenterOptions {
     /// second-order history (a stream's first two). A first frame that leaves most of its
     /// suit-looking pixels out is segmented again without it ([`FIRST_FRAME_MAX_LEFT_OUT`]).
     pub label_prior_share: f32,
+    /// A frame in the middle of a stream whose mask came out empty while more than a person's
+    /// least area of it looks like the suit, most of it left out, is segmented again without the
+    /// history (the room and the colours learned so far are kept) and without the label prior:
+    /// the history, which says the room is room, holds out a person stepping in from the
+    /// frame's edge a sliver at a time, or one it lost. Chosen on the 24 selection renderings
+    /// (docs/measurements.md, tenth session of 2026-12-07): 0.9544 → 0.9546 (walk 09_12, which
+    /// leaves the picture and steps back in, 0.9093 → 0.9149); again on every frame that left most
+    /// of the suit out, not only empty ones, the kick over the aloe (703) fell 0.9261 → 0.8460.
+    pub lost_person_retry: bool,
     /// How far the head, hands and shoes are looked for around the suit, as a share of the suit
     /// region's height (0: the mask is the suit only).
     pub part_reach: f32,
@@ -319,7 +330,9 @@ pub const SUIT_HOLE_MIN_SHARE: f32 = 0.8;
 /// The share of a stream's first frame's suit-looking pixels that its suit may leave out before
 /// the frame is segmented again without the label prior ([`Segmenter::segment`]). A person in
 /// front of a room keeps nearly all of them (the room rarely holds the suit's interleaving of cloth
-/// and markers); a first frame the prior hid keeps a few percent.
+/// and markers); a first frame the prior hid keeps a few percent. The same test decides whether a
+/// frame found empty later in the stream is looked at again
+/// ([`SegmenterOptions::lost_person_retry`]).
 pub const FIRST_FRAME_MAX_LEFT_OUT: f32 = 0.5;
 
 /// The share of a hand's expected ellipse that the part test must have found for the hand to
@@ -359,6 +372,7 @@ impl Default for SegmenterOptions {
             adapt_share: 0.7,
             first_frame_passes: 8,
             label_prior_share: 1.0,
+            lost_person_retry: true,
             part_reach: ATTACH_REACH,
             part_reach_narrow: PART_REACH,
             piece_reach: PART_REACH,
@@ -949,7 +963,20 @@ impl Segmenter {
             again.passes += first.passes;
             return again;
         }
-        self.segment_once(frame)
+        let once = self.segment_once(frame);
+        if !self.options.lost_person_retry || !once.mask.is_empty() || !self.suit_left_out() {
+            return once;
+        }
+        // Nobody found, yet much of the frame looks like the suit: the history held the person
+        // out. Look again without it and without the prior that stands in for it.
+        self.previous_mask = None;
+        self.before_previous_mask = None;
+        self.label_prior_off = true;
+        let mut again = self.segment_once(frame);
+        self.label_prior_off = false;
+        again.times += once.times;
+        again.passes += once.passes;
+        again
     }
 
     /// A stream's first frame: segmented once to learn the room's colours away from the person,
@@ -973,10 +1000,11 @@ impl Segmenter {
         last
     }
 
-    /// Whether the frame just segmented left out of its suit (the cleaned cut) more than
-    /// [`FIRST_FRAME_MAX_LEFT_OUT`] of its pixels that look like the suit (cloth or a marker's
-    /// colour within the suit's interleaving of the two, [`shows_suit_pattern`] from class 3),
-    /// when they are at least a person's least area ([`SegmenterOptions::min_person_fraction`]).
+    /// Whether the frame just segmented (a first frame, or one whose mask came out empty) left
+    /// out of its suit (the cleaned cut) more than [`FIRST_FRAME_MAX_LEFT_OUT`] of its pixels
+    /// that look like the suit (cloth or a marker's colour within the suit's interleaving of the
+    /// two, [`shows_suit_pattern`] from class 3), when they are at least a person's least area
+    /// ([`SegmenterOptions::min_person_fraction`]).
     fn suit_left_out(&self) -> bool {
         let (Some(features), Some(suit)) = (&self.previous, &self.previous_mask) else {
             return false;

@@ -62,16 +62,29 @@ struct Args {
     absent: Vec<Range<usize>>,
 }
 
-fn parse_range(text: &str) -> Result<Range<usize>, String> {
+/// `text` as two numbers on either side of `separator`; errors name `flag`, the `form` it takes
+/// and which number was bad.
+fn parse_pair<T: std::str::FromStr>(
+    text: &str,
+    separator: &str,
+    flag: &str,
+    (form, first, second): (&str, &str, &str),
+) -> Result<(T, T), String> {
     let (a, b) = text
-        .split_once("..")
-        .ok_or_else(|| format!("--absent '{text}' is not FIRST..END"))?;
-    let first = a
-        .parse::<usize>()
-        .map_err(|_| format!("--absent '{text}': bad first frame"))?;
-    let end = b
-        .parse::<usize>()
-        .map_err(|_| format!("--absent '{text}': bad end frame"))?;
+        .split_once(separator)
+        .ok_or_else(|| format!("{flag} '{text}' is not {form}"))?;
+    let a = a
+        .parse::<T>()
+        .map_err(|_| format!("{flag} '{text}': bad {first}"))?;
+    let b = b
+        .parse::<T>()
+        .map_err(|_| format!("{flag} '{text}': bad {second}"))?;
+    Ok((a, b))
+}
+
+fn parse_range(text: &str) -> Result<Range<usize>, String> {
+    let names = ("FIRST..END", "first frame", "end frame");
+    let (first, end) = parse_pair::<usize>(text, "..", "--absent", names)?;
     if end <= first {
         return Err(format!("--absent '{text}': END must be after FIRST"));
     }
@@ -79,16 +92,7 @@ fn parse_range(text: &str) -> Result<Range<usize>, String> {
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let (w, h) = text
-        .split_once('x')
-        .ok_or_else(|| format!("--size '{text}' is not WIDTHxHEIGHT"))?;
-    let w = w
-        .parse::<u32>()
-        .map_err(|_| format!("--size '{text}': bad width"))?;
-    let h = h
-        .parse::<u32>()
-        .map_err(|_| format!("--size '{text}': bad height"))?;
-    Ok((w, h))
+    parse_pair(text, "x", "--size", ("WIDTHxHEIGHT", "width", "height"))
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
@@ -150,5 +154,28 @@ fn main() -> ExitCode {
             eprintln!("error: {}", suitcap::io::error_line(e.as_ref()));
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{parse_range, parse_size};
+
+    #[test]
+    fn ranges_and_sizes_parse_and_bad_ones_name_what_is_wrong() {
+        assert_eq!(parse_range("0..20"), Ok(0..20));
+        assert_eq!(parse_size("640x480"), Ok((640, 480)));
+        for (text, wrong) in [
+            ("5..2", "END must be after FIRST"),
+            ("3..3", "END must be after FIRST"),
+            ("5-9", "is not FIRST..END"),
+            ("a..9", "bad first frame"),
+            ("1..-9", "bad end frame"),
+        ] {
+            let err = parse_range(text).expect_err(text);
+            assert!(err.contains("--absent") && err.contains(wrong), "{err}");
+        }
+        let err = parse_size("64xq").expect_err("bad height");
+        assert!(err.contains("--size '64xq': bad height"), "{err}");
     }
 }
