@@ -679,6 +679,7 @@ fn segment(
     let (mut cleaned_frames, mut removed_px, mut filled_px, mut empty_frames) =
         (0usize, 0usize, 0usize, 0usize);
     let (mut off_cloth_px, mut far_px, mut suit_hole_px) = (0usize, 0usize, 0usize);
+    let mut looked_again = 0usize;
     // The last frame's height, for the cut's factor in the summary.
     let mut last_height = None;
     loop {
@@ -719,6 +720,7 @@ fn segment(
         suit_hole_px += c.suit_hole_pixels;
         filled_px += c.pixels_filled;
         empty_frames += result.mask.is_empty() as usize;
+        looked_again += result.looked_again as usize;
         let path = out.join(&name);
         result
             .mask
@@ -738,11 +740,12 @@ fn segment(
         frames += 1;
     }
     println!(
-        "{} written to {}; {} skipped; {} with nobody",
+        "{} written to {}; {} skipped; {} with nobody; {} found empty with much of the suit in view, looked at again without the history",
         cli::counted(frames, "mask", "masks"),
         out.display(),
         cli::counted(skipped.len(), "corrupt frame", "corrupt frames"),
-        cli::counted(empty_frames, "frame", "frames")
+        cli::counted(empty_frames, "frame", "frames"),
+        cli::counted(looked_again, "frame", "frames")
     );
     let grid = match last_height {
         Some(height) => format!(

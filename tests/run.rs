@@ -518,6 +518,10 @@ fn segment_masks_every_frame_with_or_without_the_part_memory_and_colours_and_rej
         let out = tmp.path().join(name);
         let report = succeeded(segment(&out, &all_masks, extra));
         assert!(report.contains("IoU against"), "{report}");
+        assert!(
+            report.contains("0 frames found empty with much of the suit in view"),
+            "{report}"
+        );
         let masks = std::fs::read_dir(&out).expect("masks written").count();
         assert_eq!(masks, 12, "{name}");
     }

@@ -436,9 +436,12 @@ pub struct Segmentation {
     /// The max-flow (= minimum energy) of the cut.
     pub flow: f64,
     pub times: StageTimes,
-    /// How often this frame was segmented: more than once only for a stream's first frame
-    /// ([`SegmenterOptions::first_frame_passes`]).
+    /// How often this frame was segmented: more than once for a stream's first frame
+    /// ([`SegmenterOptions::first_frame_passes`]) and for a frame found empty and looked at again.
     pub passes: u32,
+    /// Whether the frame, found empty in the middle of a stream, was segmented again without the
+    /// history ([`SegmenterOptions::lost_person_retry`]).
+    pub looked_again: bool,
 }
 
 /// A segmenter with its history; one per video stream.
@@ -976,6 +979,7 @@ impl Segmenter {
         self.label_prior_off = false;
         again.times += once.times;
         again.passes += once.passes;
+        again.looked_again = true;
         again
     }
 
@@ -1098,6 +1102,7 @@ impl Segmenter {
             flow: result.flow,
             times,
             passes: 1,
+            looked_again: false,
         }
     }
 

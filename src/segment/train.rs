@@ -736,9 +736,13 @@ mod tests {
             };
             let mut seg = Segmenter::new(tables.clone(), &suit(), options);
             for _ in 0..4 {
-                assert!(seg.segment(&alone).mask.is_empty(), "nobody in the room");
+                let nobody = seg.segment(&alone);
+                assert!(nobody.mask.is_empty(), "nobody in the room");
+                assert!(!nobody.looked_again, "nothing that looks like the suit");
             }
-            seg.segment(&frames[10].image).mask.iou(&frames[10].mask)
+            let result = seg.segment(&frames[10].image);
+            assert_eq!(result.looked_again, retry);
+            result.mask.iou(&frames[10].mask)
         };
         let (with, without) = (found(true), found(false));
         assert_eq!(without, 0.0, "the history holds the square out");
