@@ -728,8 +728,7 @@ impl Segmenter {
     /// Forgets the history and the learned background (a new sequence, or the camera moved).
     pub fn reset(&mut self) {
         self.previous = None;
-        self.previous_mask = None;
-        self.before_previous_mask = None;
+        self.forget_history();
         self.previous_parts.clear();
         self.online_background = None;
         self.online_part = None;
@@ -959,12 +958,7 @@ impl Segmenter {
             // little, and the room learned from that mask holds the suit. Start the stream
             // again without the prior.
             self.reset();
-            self.label_prior_off = true;
-            let mut again = self.segment_first(frame);
-            self.label_prior_off = false;
-            again.times += first.times;
-            again.passes += first.passes;
-            return again;
+            return self.again_without_prior(frame, &first, Segmenter::segment_first);
         }
         let once = self.segment_once(frame);
         if !self.options.lost_person_retry || !once.mask.is_empty() || !self.suit_left_out() {
@@ -972,15 +966,33 @@ impl Segmenter {
         }
         // Nobody found, yet much of the frame looks like the suit: the history held the person
         // out. Look again without it and without the prior that stands in for it.
-        self.previous_mask = None;
-        self.before_previous_mask = None;
-        self.label_prior_off = true;
-        let mut again = self.segment_once(frame);
-        self.label_prior_off = false;
-        again.times += once.times;
-        again.passes += once.passes;
+        self.forget_history();
+        let mut again = self.again_without_prior(frame, &once, Segmenter::segment_once);
         again.looked_again = true;
         again
+    }
+
+    /// `frame` segmented by `segment` without the label prior, after `earlier` (whose time and
+    /// passes are counted in).
+    fn again_without_prior(
+        &mut self,
+        frame: &RgbImage,
+        earlier: &Segmentation,
+        segment: fn(&mut Segmenter, &RgbImage) -> Segmentation,
+    ) -> Segmentation {
+        self.label_prior_off = true;
+        let mut again = segment(self, frame);
+        self.label_prior_off = false;
+        again.times += earlier.times;
+        again.passes += earlier.passes;
+        again
+    }
+
+    /// Forgets the labels of the frames before, so that the next frame is cut without the
+    /// motion and temporal terms (the room and the colours learned are kept).
+    fn forget_history(&mut self) {
+        self.previous_mask = None;
+        self.before_previous_mask = None;
     }
 
     /// A stream's first frame: segmented once to learn the room's colours away from the person,
@@ -989,9 +1001,7 @@ impl Segmenter {
     fn segment_first(&mut self, frame: &RgbImage) -> Segmentation {
         let mut last = self.segment_once(frame);
         for pass in 2..=self.options.first_frame_passes {
-            self.previous = None;
-            self.previous_mask = None;
-            self.before_previous_mask = None;
+            self.forget_history();
             let mut next = self.segment_once(frame);
             next.times += last.times;
             next.passes = pass;
